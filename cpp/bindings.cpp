@@ -1,0 +1,341 @@
+// pybind11 bindings: small flat functions over numpy arrays and two classes per dimension
+// (BlockMatrix, ContactSolver). Shapes are checked here; Python checks meaning.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+#include "assembly.hpp"
+#include "contact_solver.hpp"
+#include "refinement.hpp"
+
+namespace py = pybind11;
+using namespace cmg;
+
+using DArr = py::array_t<double, py::array::c_style | py::array::forcecast>;
+using IArr = py::array_t<Index, py::array::c_style | py::array::forcecast>;
+using BArr = py::array_t<std::uint8_t, py::array::c_style | py::array::forcecast>;
+
+namespace {
+
+CellType parse_cell(const std::string& s) {
+  if (s == "triangle") return CellType::Triangle;
+  if (s == "quad") return CellType::Quad;
+  if (s == "tetra") return CellType::Tetra;
+  if (s == "hexahedron") return CellType::Hexahedron;
+  throw InputError("unknown cell type '" + s + "' (expected triangle, quad, tetra or hexahedron)");
+}
+int cell_dim(CellType t) { return (t == CellType::Triangle || t == CellType::Quad) ? 2 : 3; }
+int cell_nodes(CellType t) {
+  switch (t) {
+    case CellType::Triangle: return 3;
+    case CellType::Quad: case CellType::Tetra: return 4;
+    case CellType::Hexahedron: return 8;
+    default: return 2;
+  }
+}
+
+template <class A>
+void require_shape(const A& a, const char* name, std::initializer_list<py::ssize_t> shape) {
+  std::vector<py::ssize_t> s(shape);
+  bool ok = a.ndim() == (py::ssize_t)s.size();
+  for (std::size_t k = 0; ok && k < s.size(); ++k) ok = s[k] < 0 || a.shape(k) == s[k];
+  if (!ok) {
+    std::string want = "(", got = "(";
+    for (std::size_t k = 0; k < s.size(); ++k) want += (s[k] < 0 ? std::string("*") : std::to_string(s[k])) + (k + 1 < s.size() ? ", " : "");
+    for (py::ssize_t k = 0; k < a.ndim(); ++k) got += std::to_string(a.shape(k)) + (k + 1 < a.ndim() ? ", " : "");
+    throw InputError(std::string(name) + " has shape " + got + ") but " + want + ") is expected");
+  }
+}
+
+struct MeshView {
+  CellType type;
+  int d, k;
+  const double* X;
+  Index n;
+  const Index* C;
+  Index m;
+};
+MeshView view(const DArr& points, const IArr& cells, const std::string& cell_type) {
+  MeshView v;
+  v.type = parse_cell(cell_type);
+  v.d = cell_dim(v.type);
+  v.k = cell_nodes(v.type);
+  require_shape(points, "points", {-1, v.d});
+  require_shape(cells, "cells", {-1, v.k});
+  v.X = points.data(); v.n = points.shape(0); v.C = cells.data(); v.m = cells.shape(0);
+  for (Index i = 0; i < v.n * v.d; ++i)
+    if (!std::isfinite(v.X[i])) throw InputError("point " + std::to_string(i / v.d) + " has a non-finite coordinate");
+  for (Index i = 0; i < v.m * v.k; ++i)
+    if (v.C[i] < 0 || v.C[i] >= v.n)
+      throw InputError("cell " + std::to_string(i / v.k) + " refers to node " + std::to_string(v.C[i]) + ", outside 0.." + std::to_string(v.n - 1));
+  return v;
+}
+
+template <class F>
+auto dispatch(CellType t, F&& f) {
+  switch (t) {
+    case CellType::Triangle: return f(std::integral_constant<CellType, CellType::Triangle>{});
+    case CellType::Quad: return f(std::integral_constant<CellType, CellType::Quad>{});
+    case CellType::Tetra: return f(std::integral_constant<CellType, CellType::Tetra>{});
+    default: return f(std::integral_constant<CellType, CellType::Hexahedron>{});
+  }
+}
+
+template <class T>
+py::array_t<T> to_numpy(const std::vector<T>& v, std::vector<py::ssize_t> shape) {
+  py::array_t<T> a(shape);
+  std::copy(v.begin(), v.end(), a.mutable_data());
+  return a;
+}
+
+template <int d>
+py::dict result_to_dict(const SolveResult& R, Index n, Index nc) {
+  py::dict out;
+  out["u"] = to_numpy(R.u, {(py::ssize_t)n, d});
+  out["contact_force"] = to_numpy(R.contact_force, {(py::ssize_t)nc, d});
+  out["friction_bound"] = to_numpy(R.friction_bound, {(py::ssize_t)nc});
+  out["state"] = to_numpy(R.state, {(py::ssize_t)nc});
+  const py::ssize_t h = R.history.size();
+  py::array_t<int> cyc(h), outer(h);
+  py::array_t<double> cn(h), en(h), sec(h);
+  py::array_t<Index> act(h), st(h), sl(h);
+  py::array_t<bool> rb(h);
+  for (py::ssize_t k = 0; k < h; ++k) {
+    const auto& r = R.history[k];
+    cyc.mutable_at(k) = r.cycle; outer.mutable_at(k) = r.outer; cn.mutable_at(k) = r.correction_norm;
+    en.mutable_at(k) = r.energy; sec.mutable_at(k) = r.seconds; act.mutable_at(k) = r.active;
+    st.mutable_at(k) = r.stick; sl.mutable_at(k) = r.slip; rb.mutable_at(k) = r.rebuilt;
+  }
+  py::dict hist;
+  hist["cycle"] = cyc; hist["outer"] = outer; hist["correction_norm"] = cn; hist["energy"] = en;
+  hist["seconds"] = sec; hist["active"] = act; hist["stick"] = st; hist["slip"] = sl; hist["rebuilt"] = rb;
+  out["history"] = hist;
+  out["converged"] = R.converged;
+  out["status"] = R.status;
+  out["cycles"] = R.cycles;
+  out["outer_iterations"] = R.outer_iterations;
+  out["rebuilds"] = R.rebuilds;
+  out["seconds"] = R.seconds;
+  return out;
+}
+
+Law parse_law(const std::string& s) {
+  if (s == "linear") return Law::Linear;
+  if (s == "frictionless") return Law::Frictionless;
+  if (s == "tresca") return Law::Tresca;
+  if (s == "coulomb") return Law::Coulomb;
+  throw InputError("unknown friction law '" + s + "' (expected linear, frictionless, tresca or coulomb)");
+}
+CycleType parse_cycle(const std::string& s) {
+  if (s == "V") return CycleType::V;
+  if (s == "W") return CycleType::W;
+  if (s == "F") return CycleType::F;
+  throw InputError("unknown cycle type '" + s + "' (expected V, W or F)");
+}
+
+template <int d>
+void bind_dim(py::module_& m) {
+  const std::string sfx = std::to_string(d) + "D";
+  using BM = BlockMatrix<d>;
+  py::class_<BM, std::shared_ptr<BM>>(m, ("BlockMatrix" + sfx).c_str(), "Block sparse rows with d x d blocks")
+      .def_property_readonly("shape", [](const BM& A) { return py::make_tuple(A.rows * d, A.cols * d); })
+      .def_property_readonly("block_size", [](const BM&) { return d; })
+      .def_property_readonly("nnz_blocks", &BM::nnz)
+      .def_property_readonly("indptr", [](const BM& A) { return to_numpy(A.indptr, {(py::ssize_t)A.indptr.size()}); })
+      .def_property_readonly("indices", [](const BM& A) { return to_numpy(A.indices, {(py::ssize_t)A.indices.size()}); })
+      .def_property_readonly("data", [](const BM& A) { return to_numpy(A.values, {(py::ssize_t)A.nnz(), d, d}); })
+      .def("memory_bytes", &BM::memory_bytes)
+      .def("matvec", [](const BM& A, DArr x) {
+        require_shape(x, "x", {(py::ssize_t)A.cols, d});
+        py::array_t<double> y({(py::ssize_t)A.rows, (py::ssize_t)d});
+        A.multiply(x.data(), y.mutable_data());
+        return y;
+      });
+
+  using CS = ContactSolver<d>;
+  py::class_<CS>(m, ("ContactSolver" + sfx).c_str(), "Multigrid for linear elasticity with contact and friction")
+      .def(py::init([](const BM& A, DArr f, BArr fixed, DArr fixed_values, IArr contact_nodes, DArr normals, DArr gaps,
+                       DArr coefficients, const std::string& law, py::list transfers, const std::string& cycle, int nu1,
+                       int nu2) {
+             const py::ssize_t n = A.rows, nc = contact_nodes.size();
+             require_shape(f, "load", {n, d});
+             require_shape(fixed, "fixed", {n, d});
+             require_shape(fixed_values, "fixed_values", {n, d});
+             require_shape(contact_nodes, "contact_nodes", {nc});
+             require_shape(normals, "normals", {nc, d});
+             require_shape(gaps, "gaps", {nc});
+             require_shape(coefficients, "coefficients", {nc});
+             if (nu1 < 0 || nu2 < 0 || nu1 + nu2 < 1 || nu1 > 100 || nu2 > 100)
+               throw InputError("smoothing steps nu1, nu2 must lie in 0..100 with nu1 + nu2 >= 1");
+             std::vector<typename CS::Transfer> T;
+             for (auto item : transfers) {
+               auto t = item.cast<py::tuple>();
+               typename CS::Transfer tr;
+               tr.n_fine = t[0].cast<Index>();
+               tr.n_coarse = t[1].cast<Index>();
+               IArr ptr = t[2].cast<IArr>(), par = t[3].cast<IArr>();
+               DArr w = t[4].cast<DArr>();
+               tr.ptr.assign(ptr.data(), ptr.data() + ptr.size());
+               tr.parent.assign(par.data(), par.data() + par.size());
+               tr.weight.assign(w.data(), w.data() + w.size());
+               if (tr.ptr.empty() || tr.ptr.back() != (Index)tr.parent.size() || tr.parent.size() != tr.weight.size())
+                 throw InputError("inconsistent prolongation arrays");
+               T.push_back(std::move(tr));
+             }
+             CycleOptions co;
+             co.cycle = parse_cycle(cycle);
+             co.nu1 = nu1;
+             co.nu2 = nu2;
+             std::vector<Index> cn(contact_nodes.data(), contact_nodes.data() + nc);
+             return new CS(A, f.data(), fixed.data(), fixed_values.data(), cn, normals.data(), gaps.data(), coefficients.data(),
+                           parse_law(law), T, co);
+           }),
+           py::arg("A"), py::arg("load"), py::arg("fixed"), py::arg("fixed_values"), py::arg("contact_nodes"),
+           py::arg("normals"), py::arg("gaps"), py::arg("coefficients"), py::arg("law"), py::arg("transfers"),
+           py::arg("cycle") = "V", py::arg("nu1") = 3, py::arg("nu2") = 3)
+      .def("solve", [](CS& S, py::object u0, double tol, double rtol, int max_cycles, bool fixed_point, double fp_tol,
+                       int fp_max) {
+             SolveOptions o;
+             o.tol = tol; o.rtol = rtol; o.max_cycles = max_cycles; o.fixed_point_tol = fp_tol; o.fixed_point_max = fp_max;
+             if (!(tol >= 0) || !(rtol >= 0) || !(tol > 0 || rtol > 0)) throw InputError("tolerances must be >= 0, one of them > 0");
+             if (max_cycles < 1) throw InputError("max_cycles must be at least 1");
+             DArr u;
+             const double* up = nullptr;
+             if (!u0.is_none()) {
+               u = u0.cast<DArr>();
+               require_shape(u, "u0", {(py::ssize_t)S.num_nodes(), d});
+               up = u.data();
+             }
+             S.set_interrupt_check([] { py::gil_scoped_acquire g; return PyErr_CheckSignals() != 0; });
+             SolveResult R;
+             bool interrupted = false;
+             {
+               py::gil_scoped_release release;
+               try { R = fixed_point ? S.solve_fixed_point(up, o) : S.solve(up, o); }
+               catch (const Interrupted&) { interrupted = true; }
+             }
+             S.set_interrupt_check(nullptr);
+             if (interrupted) throw py::error_already_set();
+             return result_to_dict<d>(R, S.num_nodes(), S.num_contact());
+           },
+           py::arg("u0") = py::none(), py::arg("tol") = 1e-11, py::arg("rtol") = 0.0, py::arg("max_cycles") = 200,
+           py::arg("fixed_point") = false, py::arg("fixed_point_tol") = 1e-9, py::arg("fixed_point_max") = 100)
+      .def("set_tresca_bounds", [](CS& S, DArr s) { require_shape(s, "bounds", {(py::ssize_t)S.num_contact()}); S.set_tresca_bounds(s.data()); })
+      .def("set_coefficients", [](CS& S, DArr s) { require_shape(s, "coefficients", {(py::ssize_t)S.num_contact()}); S.set_coefficients(s.data()); })
+      .def_property_readonly("num_levels", [](const CS& S) { return S.coarse().num_coarse_levels() + 1; })
+      .def("coarse_matrix", [](const CS& S, int l) {
+             if (l < 0 || l >= S.coarse().num_coarse_levels()) throw py::index_error("no such coarse level");
+             return std::make_shared<BM>(S.coarse().matrix(l));
+           })
+      .def("fine_matrix", [](const CS& S) { return std::make_shared<BM>(S.fine_matrix()); })
+      .def("memory_bytes", &CS::memory_bytes);
+
+  m.def(("solve_node_tresca_" + sfx).c_str(), [](DArr B, DArr b, double g, double s) {
+    require_shape(B, "B", {d, d}); require_shape(b, "b", {d});
+    Vec<d> x = solve_node_tresca<d>(CMatMap<d>(B.data()), CVecMap<d>(b.data()), g, s);
+    return to_numpy(std::vector<double>(x.data(), x.data() + d), {d});
+  });
+  m.def(("solve_node_coulomb_" + sfx).c_str(), [](DArr B, DArr b, double g, double F, DArr old) {
+    require_shape(B, "B", {d, d}); require_shape(b, "b", {d}); require_shape(old, "old", {d});
+    Vec<d> x = solve_node_coulomb<d>(CMatMap<d>(B.data()), CVecMap<d>(b.data()), g, F, CVecMap<d>(old.data()));
+    return to_numpy(std::vector<double>(x.data(), x.data() + d), {d});
+  });
+  m.def(("restrict_bounds_" + sfx).c_str(), [](Index n_fine, Index n_coarse, IArr ptr, IArr parent, DArr weight, py::object mask,
+                                               DArr lo, DArr hi) {
+    BlockMatrix<d> P = make_prolongation<d>(n_fine, n_coarse, ptr.data(), parent.data(), weight.data());
+    require_shape(lo, "lo", {(py::ssize_t)n_fine, d}); require_shape(hi, "hi", {(py::ssize_t)n_fine, d});
+    BArr mk;
+    const std::uint8_t* mp = nullptr;
+    if (!mask.is_none()) { mk = mask.cast<BArr>(); require_shape(mk, "mask", {(py::ssize_t)n_fine, d}); mp = mk.data(); }
+    py::array_t<double> lc({(py::ssize_t)n_coarse, (py::ssize_t)d}), hc({(py::ssize_t)n_coarse, (py::ssize_t)d});
+    restrict_bounds<d>(P, mp, lo.data(), hi.data(), lc.mutable_data(), hc.mutable_data());
+    return py::make_tuple(lc, hc);
+  });
+  m.def(("galerkin_product_" + sfx).c_str(), [](const BM& A, Index n_coarse, IArr ptr, IArr parent, DArr weight) {
+    BlockMatrix<d> P = make_prolongation<d>(A.rows, n_coarse, ptr.data(), parent.data(), weight.data());
+    auto C = std::make_shared<BM>();
+    GalerkinProduct<d> gp;
+    gp.build(A, P, nullptr, *C);
+    return C;
+  });
+}
+
+}  // namespace
+
+PYBIND11_MODULE(_core, m) {
+  m.doc() = "contactmg compiled core";
+  bind_dim<2>(m);
+  bind_dim<3>(m);
+
+  m.def("check_cells", [](DArr points, IArr cells, const std::string& cell_type) {
+    MeshView v = view(points, cells, cell_type);
+    dispatch(v.type, [&](auto T) { check_cells<decltype(T)::value>(v.X, v.n, v.C, v.m); });
+  });
+
+  m.def("assemble_elasticity", [](DArr points, IArr cells, const std::string& cell_type, double E, double nu) -> py::object {
+    MeshView v = view(points, cells, cell_type);
+    Material mat{E, nu};
+    mat.validate();
+    return dispatch(v.type, [&](auto T) -> py::object {
+      constexpr CellType t = decltype(T)::value;
+      auto A = std::make_shared<BlockMatrix<Element<t>::dim>>();
+      {
+        py::gil_scoped_release r;
+        *A = assemble_elasticity<t>(v.X, v.n, v.C, v.m, mat);
+      }
+      return py::cast(A);
+    });
+  }, py::arg("points"), py::arg("cells"), py::arg("cell_type"), py::arg("E"), py::arg("nu"));
+
+  m.def("assemble_mass_load", [](DArr points, IArr cells, const std::string& cell_type, DArr nodal) {
+    MeshView v = view(points, cells, cell_type);
+    if (nodal.ndim() != 2 || nodal.shape(0) != v.n) throw InputError("nodal values must have shape (num_points, components)");
+    const int nc = nodal.shape(1);
+    py::array_t<double> out({(py::ssize_t)v.n, (py::ssize_t)nc});
+    std::fill(out.mutable_data(), out.mutable_data() + v.n * nc, 0.0);
+    dispatch(v.type, [&](auto T) { assemble_mass_load<decltype(T)::value>(v.X, v.C, v.m, nodal.data(), nc, out.mutable_data()); });
+    return out;
+  });
+
+  m.def("assemble_facet_load", [](DArr points, IArr facets, DArr nodal) {
+    const int d = points.ndim() == 2 ? points.shape(1) : 0;
+    if (d != 2 && d != 3) throw InputError("points must have shape (n, 2) or (n, 3)");
+    const int kf = facets.ndim() == 2 ? facets.shape(1) : 0;
+    const Index n = points.shape(0), nf = facets.shape(0);
+    if (!((d == 2 && kf == 2) || (d == 3 && (kf == 3 || kf == 4))))
+      throw InputError("facets must have 2 nodes in 2D and 3 or 4 nodes in 3D");
+    if (nodal.ndim() != 2 || nodal.shape(0) != n) throw InputError("nodal values must have shape (num_points, components)");
+    for (Index i = 0; i < nf * kf; ++i)
+      if (facets.data()[i] < 0 || facets.data()[i] >= n) throw InputError("a facet refers to a node out of range");
+    const int nc = nodal.shape(1);
+    py::array_t<double> out({(py::ssize_t)n, (py::ssize_t)nc});
+    std::fill(out.mutable_data(), out.mutable_data() + n * nc, 0.0);
+    if (d == 2) assemble_facet_load<CellType::Line, 2>(points.data(), facets.data(), nf, nodal.data(), nc, out.mutable_data());
+    else if (kf == 3) assemble_facet_load<CellType::Triangle, 3>(points.data(), facets.data(), nf, nodal.data(), nc, out.mutable_data());
+    else assemble_facet_load<CellType::Quad, 3>(points.data(), facets.data(), nf, nodal.data(), nc, out.mutable_data());
+    return out;
+  });
+
+  m.def("refine", [](DArr points, IArr cells, const std::string& cell_type, IArr facets, IArr facet_tags) {
+    MeshView v = view(points, cells, cell_type);
+    if (v.d != 2) throw InputError("uniform refinement of 3D meshes is not implemented yet");
+    require_shape(facets, "facets", {-1, 2});
+    require_shape(facet_tags, "facet_tags", {facets.shape(0)});
+    RefinedMesh R;
+    {
+      py::gil_scoped_release r;
+      R = refine_2d(v.type, v.X, v.n, v.C, v.m, facets.data(), facet_tags.data(), facets.shape(0));
+    }
+    const py::ssize_t nf = R.points.size() / v.d;
+    py::dict out;
+    out["points"] = to_numpy(R.points, {nf, v.d});
+    out["cells"] = to_numpy(R.cells, {(py::ssize_t)R.cells.size() / v.k, v.k});
+    out["facets"] = to_numpy(R.facets, {(py::ssize_t)R.facets.size() / 2, 2});
+    out["facet_tags"] = to_numpy(R.facet_tags, {(py::ssize_t)R.facet_tags.size()});
+    out["ptr"] = to_numpy(R.ptr, {(py::ssize_t)R.ptr.size()});
+    out["parent"] = to_numpy(R.parent, {(py::ssize_t)R.parent.size()});
+    out["weight"] = to_numpy(R.weight, {(py::ssize_t)R.weight.size()});
+    out["boundary_nodes"] = to_numpy(R.boundary_nodes, {(py::ssize_t)R.boundary_nodes.size()});
+    out["boundary_tags"] = to_numpy(R.boundary_tags, {(py::ssize_t)R.boundary_tags.size()});
+    return out;
+  });
+}

@@ -1,0 +1,105 @@
+// Block sparse rows with fixed d x d blocks: the one matrix type of the core.
+#pragma once
+#include <algorithm>
+#include "common.hpp"
+
+namespace cmg {
+
+template <int d>
+struct BlockMatrix {
+  static constexpr int bs = d * d;
+  Index rows = 0, cols = 0;          // in blocks
+  std::vector<Index> indptr;         // rows + 1
+  std::vector<Index> indices;        // block column of each stored block, sorted per row
+  std::vector<double> values;        // nnz * d * d, each block row-major
+  std::vector<Index> diag;           // position of the diagonal block per row (-1 if absent)
+
+  Index nnz() const { return (Index)indices.size(); }
+  MatMap<d> block(Index k) { return MatMap<d>(values.data() + k * bs); }
+  CMatMap<d> block(Index k) const { return CMatMap<d>(values.data() + k * bs); }
+
+  void find_diagonal() {
+    diag.assign(rows, -1);
+    for (Index i = 0; i < rows; ++i)
+      for (Index k = indptr[i]; k < indptr[i + 1]; ++k)
+        if (indices[k] == i) { diag[i] = k; break; }
+  }
+
+  // Position of block (i, j), or -1.
+  Index find(Index i, Index j) const {
+    auto b = indices.begin() + indptr[i], e = indices.begin() + indptr[i + 1];
+    auto it = std::lower_bound(b, e, j);
+    return (it != e && *it == j) ? Index(it - indices.begin()) : -1;
+  }
+
+  // y = A x
+  void multiply(const double* x, double* y) const {
+    for (Index i = 0; i < rows; ++i) {
+      Vec<d> s = Vec<d>::Zero();
+      for (Index k = indptr[i]; k < indptr[i + 1]; ++k)
+        s.noalias() += block(k) * CVecMap<d>(x + d * indices[k]);
+      VecMap<d>(y + d * i) = s;
+    }
+  }
+
+  // y = A^T x (rectangular transfer operators use this as restriction)
+  void multiply_transpose(const double* x, double* y) const {
+    std::fill(y, y + d * cols, 0.0);
+    for (Index i = 0; i < rows; ++i) {
+      CVecMap<d> xi(x + d * i);
+      for (Index k = indptr[i]; k < indptr[i + 1]; ++k)
+        VecMap<d>(y + d * indices[k]).noalias() += block(k).transpose() * xi;
+    }
+  }
+
+  double energy_product(const double* x) const {  // x^T A x
+    double e = 0;
+    for (Index i = 0; i < rows; ++i) {
+      Vec<d> s = Vec<d>::Zero();
+      for (Index k = indptr[i]; k < indptr[i + 1]; ++k)
+        s.noalias() += block(k) * CVecMap<d>(x + d * indices[k]);
+      e += CVecMap<d>(x + d * i).dot(s);
+    }
+    return e;
+  }
+
+  std::size_t memory_bytes() const {
+    return sizeof(Index) * (indptr.size() + indices.size() + diag.size()) + sizeof(double) * values.size();
+  }
+};
+
+// Builds the block pattern of a square matrix from lists of coupled nodes (e.g. the cells of a mesh):
+// every pair of nodes in one group is coupled.
+template <int d>
+BlockMatrix<d> pattern_from_groups(Index n, const Index* groups, Index num_groups, int group_size) {
+  std::vector<Index> count(n + 1, 0);
+  // Upper bound per row first, then sort and unique in place.
+  for (Index g = 0; g < num_groups; ++g)
+    for (int a = 0; a < group_size; ++a) count[groups[g * group_size + a] + 1] += group_size;
+  for (Index i = 0; i < n; ++i) count[i + 1] += count[i];
+  std::vector<Index> cols(count[n]);
+  std::vector<Index> fill(count.begin(), count.end() - 1);
+  for (Index g = 0; g < num_groups; ++g)
+    for (int a = 0; a < group_size; ++a) {
+      Index i = groups[g * group_size + a];
+      for (int b = 0; b < group_size; ++b) cols[fill[i]++] = groups[g * group_size + b];
+    }
+  BlockMatrix<d> A;
+  A.rows = A.cols = n;
+  A.indptr.assign(n + 1, 0);
+  for (Index i = 0; i < n; ++i) {
+    auto b = cols.begin() + count[i], e = cols.begin() + count[i + 1];
+    std::sort(b, e);
+    A.indptr[i + 1] = A.indptr[i] + (std::unique(b, e) - b);
+  }
+  A.indices.resize(A.indptr[n]);
+  for (Index i = 0; i < n; ++i) {
+    Index len = A.indptr[i + 1] - A.indptr[i];
+    std::copy(cols.begin() + count[i], cols.begin() + count[i] + len, A.indices.begin() + A.indptr[i]);
+  }
+  A.values.assign(A.indices.size() * BlockMatrix<d>::bs, 0.0);
+  A.find_diagonal();
+  return A;
+}
+
+}  // namespace cmg

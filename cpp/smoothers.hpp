@@ -1,0 +1,67 @@
+// Gauss-Seidel sweeps on one level: block (linear) and projected (bounds per component).
+#pragma once
+#include <algorithm>
+#include "block_matrix.hpp"
+
+namespace cmg {
+
+// Inverted diagonal blocks. A component whose diagonal entry is exactly zero has an empty row and
+// column (a truncated or unused dof): it is inverted as identity, so with a zero right-hand side
+// it stays zero.
+template <int d>
+void invert_diagonal(const BlockMatrix<d>& A, std::vector<double>& Dinv) {
+  Dinv.resize(A.rows * d * d);
+  for (Index i = 0; i < A.rows; ++i) {
+    Mat<d> D = Mat<d>::Zero();
+    if (A.diag[i] >= 0) D = A.block(A.diag[i]);
+    for (int c = 0; c < d; ++c)
+      if (D(c, c) == 0) { D.row(c).setZero(); D.col(c).setZero(); D(c, c) = 1; }
+    MatMap<d>(Dinv.data() + i * d * d) = D.inverse();
+  }
+}
+
+// b_i - sum_{k != i} A_ik x_k
+template <int d>
+inline Vec<d> local_rhs(const BlockMatrix<d>& A, const double* x, const double* b, Index i) {
+  Vec<d> s = CVecMap<d>(b + d * i);
+  for (Index k = A.indptr[i]; k < A.indptr[i + 1]; ++k)
+    if (A.indices[k] != i) s.noalias() -= A.block(k) * CVecMap<d>(x + d * A.indices[k]);
+  return s;
+}
+
+template <int d>
+void block_gs_sweep(const BlockMatrix<d>& A, const std::vector<double>& Dinv, const double* b, double* x, bool forward) {
+  const Index n = A.rows;
+  for (Index ii = 0; ii < n; ++ii) {
+    const Index i = forward ? ii : n - 1 - ii;
+    VecMap<d>(x + d * i) = CMatMap<d>(Dinv.data() + i * d * d) * local_rhs<d>(A, x, b, i);
+  }
+}
+
+// Projected Gauss-Seidel: nodes without finite bounds get the exact block solve, bounded nodes a
+// component-wise exact minimization with clamping (each step lowers the quadratic energy).
+template <int d>
+void projected_gs_sweep(const BlockMatrix<d>& A, const std::vector<double>& Dinv, const std::vector<std::uint8_t>& bounded,
+                        const double* lo, const double* hi, const double* b, double* x, bool forward) {
+  const Index n = A.rows;
+  for (Index ii = 0; ii < n; ++ii) {
+    const Index i = forward ? ii : n - 1 - ii;
+    const Vec<d> s = local_rhs<d>(A, x, b, i);
+    VecMap<d> xi(x + d * i);
+    if (!bounded[i]) {
+      xi = CMatMap<d>(Dinv.data() + i * d * d) * s;
+      continue;
+    }
+    const auto D = A.block(A.diag[i]);
+    for (int c = 0; c < d; ++c) {
+      if (D(c, c) == 0) continue;
+      double v = s[c];
+      for (int a = 0; a < d; ++a)
+        if (a != c) v -= D(c, a) * xi[a];
+      // max/min rather than std::clamp: rounding may leave lo a hair above hi
+      xi[c] = std::max(lo[d * i + c], std::min(v / D(c, c), hi[d * i + c]));
+    }
+  }
+}
+
+}  // namespace cmg
