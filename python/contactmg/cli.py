@@ -1,0 +1,172 @@
+"""Command line: `contactmg hertz` and `contactmg table1` (DESIGN section 9)."""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import resource
+import sys
+from typing import List, Optional
+
+EXIT_OK, EXIT_BAD_INPUT, EXIT_NO_CONVERGENCE = 0, 2, 3
+MAX_LEVELS = 12
+
+
+def _positive_int(name, lo=1, hi=None):
+    def parse(s):
+        try:
+            v = int(s)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{name} must be an integer, got {s!r}")
+        if v < lo or (hi is not None and v > hi):
+            raise argparse.ArgumentTypeError(f"{name} must lie in {lo}..{hi}, got {v}" if hi else f"{name} must be >= {lo}, got {v}")
+        return v
+    return parse
+
+
+def _nonneg_float(name, positive=False):
+    def parse(s):
+        try:
+            v = float(s)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{name} must be a number, got {s!r}")
+        if not math.isfinite(v) or v < 0 or (positive and v == 0):
+            raise argparse.ArgumentTypeError(f"{name} must be a finite number {'>' if positive else '>='} 0, got {s}")
+        return v
+    return parse
+
+
+def _writable(path: str) -> str:
+    if path == "-":
+        return path
+    d = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(d):
+        raise argparse.ArgumentTypeError(f"cannot write {path}: directory {d} does not exist")
+    if not os.access(d, os.W_OK) or (os.path.exists(path) and not os.access(path, os.W_OK)):
+        raise argparse.ArgumentTypeError(f"cannot write {path}: permission denied")
+    if os.path.isdir(path):
+        raise argparse.ArgumentTypeError(f"cannot write {path}: it is a directory")
+    return path
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="contactmg", description="Multigrid for elastic contact with Coulomb friction")
+    sub = p.add_subparsers(dest="command", required=True)
+    h = sub.add_parser("hertz", help="the Hertz benchmark of the seed paper")
+    h.add_argument("--cell", choices=["triangle", "quad"], default="triangle")
+    h.add_argument("--levels", type=_positive_int("--levels", 1, MAX_LEVELS), default=6,
+                   help="levels in all; level 1 is the coarse mesh")
+    h.add_argument("--friction", type=_nonneg_float("--friction"), default=0.4)
+    h.add_argument("--method", choices=["nmg", "fixed-point", "linear"], default="nmg")
+    h.add_argument("--tol", type=_nonneg_float("--tol", positive=True), default=1e-11)
+    h.add_argument("--max-cycles", type=_positive_int("--max-cycles"), default=200)
+    h.add_argument("--cycle", choices=["V", "W", "F"], default="V")
+    h.add_argument("--nu1", type=_positive_int("--nu1", 0, 100), default=3)
+    h.add_argument("--nu2", type=_positive_int("--nu2", 0, 100), default=3)
+    h.add_argument("--json", type=_writable, metavar="PATH|-")
+    h.add_argument("--vtu", type=_writable, metavar="PATH")
+    h.add_argument("--plot", type=_writable, metavar="PATH")
+    h.add_argument("-q", "--quiet", action="store_true")
+    t = sub.add_parser("table1", help="Table 1 and Figure 1 of the paper: both algorithms over levels and F")
+    t.add_argument("--levels", type=_positive_int("--levels", 1, MAX_LEVELS), nargs="+", default=None)
+    t.add_argument("--frictions", type=_nonneg_float("--frictions", positive=True), nargs="+", default=None)
+    t.add_argument("--cell", choices=["triangle", "quad"], default="triangle")
+    t.add_argument("--json", type=_writable, metavar="PATH|-")
+    t.add_argument("--plot", type=_writable, metavar="PATH")
+    t.add_argument("-q", "--quiet", action="store_true")
+    return p
+
+
+def peak_rss_mb() -> float:
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+
+
+def hertz_report(args, problem, result) -> dict:
+    from . import hertz
+
+    c = result.counts()
+    reaction = result.reaction
+    load = float(reaction[1])
+    sn = result.normal_stress
+    out = {
+        "problem": "hertz", "dim": problem.mesh.dim, "cell": args.cell, "levels": args.levels,
+        "nodes": int(problem.mesh.num_points), "dofs": int(problem.mesh.num_points * problem.mesh.dim),
+        "method": args.method, "friction": args.friction, "tol": args.tol, "converged": result.converged,
+        "status": result.status, "cycles": result.cycles, "outer_iterations": result.outer_iterations,
+        "setup_seconds": result.setup_seconds, "solve_seconds": result.solve_seconds,
+        "history": [{"cycle": int(k), "correction_norm": float(v), "seconds": float(s)}
+                    for k, v, s in zip(result.history["cycle"], result.history["correction_norm"], result.history["seconds"])],
+        "contact_nodes": c["contact_nodes"], "stick_nodes": c["stick_nodes"], "slip_nodes": c["slip_nodes"],
+        "contact_halfwidth": result.contact_halfwidth, "stick_halfwidth": result.stick_halfwidth,
+        "reaction": [float(v) for v in reaction],
+        "max_normal_stress": float(abs(sn).max()) if len(sn) else 0.0,
+        "coarse_rebuilds": result.rebuilds,
+        "cycle_type": f"{args.cycle}({args.nu1},{args.nu2})",
+        "hertz_halfwidth": hertz.halfwidth(load) if load > 0 else None,
+        "hertz_peak_pressure": hertz.peak_pressure(load) if load > 0 else None,
+        "peak_rss_mb": peak_rss_mb(),
+    }
+    return out
+
+
+def _emit_json(path: str, obj: dict) -> None:
+    text = json.dumps(obj, indent=1)
+    if path == "-":
+        sys.stdout.write(text + "\n")
+    else:
+        with open(path, "w") as fh:
+            fh.write(text + "\n")
+
+
+def run_hertz(args) -> int:
+    from .hertz import hertz_problem
+
+    problem = hertz_problem(args.cell, args.levels, args.friction, coulomb_at_zero=args.method == "fixed-point",
+                            cycle=args.cycle, nu1=args.nu1, nu2=args.nu2)
+    result = problem.solve(args.method, tol=args.tol, max_cycles=args.max_cycles)
+    report = hertz_report(args, problem, result)
+    if args.json:
+        _emit_json(args.json, report)
+    if args.vtu:
+        result.write_vtu(args.vtu)
+    if args.plot:
+        from .plots import plot_boundary_stress
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        fig, ax = plt.subplots(figsize=(7, 4))
+        plot_boundary_stress(result, ax=ax, friction=args.friction)
+        fig.tight_layout()
+        fig.savefig(args.plot, dpi=150)
+        plt.close(fig)
+    if not args.quiet:
+        stream = sys.stderr if args.json == "-" else sys.stdout
+        print(f"hertz {args.cell} levels={args.levels} dofs={report['dofs']} F={args.friction} method={args.method}: "
+              f"{result.status}, {result.cycles} cycles"
+              + (f", {result.outer_iterations} outer iterations" if result.outer_iterations is not None else "")
+              + f", setup {result.setup_seconds:.2f} s, solve {result.solve_seconds:.2f} s, "
+              f"contact {report['contact_nodes']} (stick {report['stick_nodes']}, slip {report['slip_nodes']}), "
+              f"reaction {report['reaction'][1]:.6g}", file=stream)
+    return EXIT_OK if result.converged else EXIT_NO_CONVERGENCE
+
+
+def main(argv: Optional[List[str]] = None) -> int:
+    parser = _parser()
+    args = parser.parse_args(argv)
+    try:
+        if args.command == "hertz":
+            return run_hertz(args)
+        from .table1 import run_table1
+        return run_table1(args)
+    except (ValueError, TypeError, MemoryError) as e:
+        print(f"contactmg {args.command}: error: {e}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except KeyboardInterrupt:
+        print(f"contactmg {args.command}: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())
