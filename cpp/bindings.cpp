@@ -115,6 +115,7 @@ py::dict result_to_dict(const SolveResult& R, Index n, Index nc) {
   out["outer_iterations"] = R.outer_iterations;
   out["rebuilds"] = R.rebuilds;
   out["seconds"] = R.seconds;
+  out["rebuild_seconds"] = R.rebuild_seconds;
   return out;
 }
 
@@ -227,7 +228,8 @@ void bind_dim(py::module_& m) {
              return std::make_shared<BM>(S.coarse().matrix(l));
            })
       .def("fine_matrix", [](const CS& S) { return std::make_shared<BM>(S.fine_matrix()); })
-      .def("memory_bytes", &CS::memory_bytes);
+      .def("memory_bytes", &CS::memory_bytes)
+      .def("rebuild_coarse", &CS::rebuild_coarse, "Full Galerkin rebuild of the coarse matrices for the current truncation");
 
   m.def(("solve_node_tresca_" + sfx).c_str(), [](DArr B, DArr b, double g, double s) {
     require_shape(B, "B", {d, d}); require_shape(b, "b", {d});

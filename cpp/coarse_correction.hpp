@@ -3,6 +3,7 @@
 // level within bounds restricted monotonically from the fine level, an exact coarsest solve.
 // Without bounds this is the coarse part of a plain linear V/W/F-cycle.
 #pragma once
+#include <chrono>
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 #include "smoothers.hpp"
@@ -48,15 +49,77 @@ class CoarseCorrection {
   void rebuild(const BlockMatrix<d>& A_fine, const std::uint8_t* mask) {
     const int nc = (int)lv_.size();
     if (nc == 0) return;
+    const auto t0 = std::chrono::steady_clock::now();
     for (int l = nc - 1; l >= 0; --l) {
       const BlockMatrix<d>& Af = (l == nc - 1) ? A_fine : lv_[l + 1].A;
       gp_[l].build(Af, P_[l], l == nc - 1 ? mask : nullptr, lv_[l].A);
-      invert_diagonal<d>(lv_[l].A, lv_[l].Dinv);
+      lv_[l].scale = max_diagonal<d>(lv_[l].A);
+      invert_diagonal<d>(lv_[l].A, lv_[l].Dinv, lv_[l].inert, lv_[l].scale);
+      if (lv_[l].slot.size() != lv_[l].A.indices.size()) lv_[l].slot.assign(lv_[l].A.indices.size(), -1);
     }
     factorize_coarsest();
     ++rebuilds_;
+    incremental_ = 0;
+    rebuild_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }
   int rebuilds() const { return rebuilds_; }
+
+  // The same after the fine mask changed on a few dofs, at a cost proportional to the change:
+  // with Delta = T_new - T_old,  C_new - C_old = X(T_new) + X(T_old)^T,  X(T) = P^T Delta A T P,
+  // and each coarser level changes by P^T (change of the level above) P. A full rebuild every
+  // kFullRebuildEvery updates keeps round-off from accumulating.
+  void update(const BlockMatrix<d>& A, const std::uint8_t* old_mask, const std::uint8_t* new_mask) {
+    const int nc = (int)lv_.size();
+    if (nc == 0) return;
+    if (incremental_ >= kFullRebuildEvery) { rebuild(A, new_mask); return; }
+    const auto t0 = std::chrono::steady_clock::now();
+    const int top = nc - 1;
+    const BlockMatrix<d>& P = P_[top];
+    Level& C = lv_[top];
+    for (Index i = 0; i < A.rows; ++i)
+      for (int a = 0; a < d; ++a) {
+        const Index k = i * d + a;
+        if (old_mask[k] == new_mask[k]) continue;
+        const double delta = new_mask[k] ? 1.0 : -1.0;
+        for (Index b = P.indptr[i]; b < P.indptr[i + 1]; ++b) {
+          const Vec<d> p = delta * P.block(b).row(a).transpose();
+          if (p.isZero(0.0)) continue;
+          const Index I = P.indices[b];
+          for (Index q = A.indptr[i]; q < A.indptr[i + 1]; ++q) {
+            const Index j = A.indices[q];
+            Eigen::Matrix<double, 1, d> vn = A.block(q).row(a), vo = vn;
+            for (int c = 0; c < d; ++c) { vn[c] *= new_mask[j * d + c]; vo[c] *= old_mask[j * d + c]; }
+            for (Index b2 = P.indptr[j]; b2 < P.indptr[j + 1]; ++b2) {
+              const Index J = P.indices[b2];
+              add_delta(C, I, J, p * (vn * P.block(b2)));
+              add_delta(C, J, I, (p * (vo * P.block(b2))).transpose());
+            }
+          }
+        }
+      }
+    for (int l = top; l >= 0; --l) {
+      Level& L = lv_[l];
+      if (l > 0) {  // propagate before applying: the entries of L.delta are what changed on level l
+        Level& Cc = lv_[l - 1];
+        const BlockMatrix<d>& Pl = P_[l - 1];
+        for (const auto& e : L.delta)
+          for (Index b = Pl.indptr[e.i]; b < Pl.indptr[e.i + 1]; ++b)
+            for (Index b2 = Pl.indptr[e.j]; b2 < Pl.indptr[e.j + 1]; ++b2)
+              add_delta(Cc, Pl.indices[b], Pl.indices[b2], Pl.block(b).transpose() * e.M * Pl.block(b2));
+      }
+      for (const auto& e : L.delta) {
+        L.A.block(e.pos) += e.M;
+        L.slot[e.pos] = -1;
+      }
+      for (const auto& e : L.delta) invert_diagonal<d>(L.A, L.Dinv, L.inert, L.scale, e.i, e.i + 1);
+      L.delta.clear();
+    }
+    factorize_coarsest();
+    ++rebuilds_;
+    ++incremental_;
+    rebuild_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  }
+  double rebuild_seconds() const { return rebuild_seconds_; }
 
   // u_fine += P~ c, with c the multilevel correction for the fine residual r and the fine
   // correction bounds [lo, hi] (ignored when !bounded).
@@ -75,12 +138,31 @@ class CoarseCorrection {
   }
 
  private:
+  struct DeltaEntry {
+    Index pos, i, j;
+    Mat<d> M;
+  };
   struct Level {
     BlockMatrix<d> A;
     std::vector<double> Dinv, x, b, r, lo, hi;
-    std::vector<std::uint8_t> bounded;
+    std::vector<std::uint8_t> bounded, inert;
     bool any_bounds = false;
+    double scale = 0;                // largest diagonal entry at the last full rebuild
+    std::vector<DeltaEntry> delta;   // pending incremental change of A
+    std::vector<Index> slot;         // position in A -> entry of delta, or -1
   };
+  static constexpr int kFullRebuildEvery = 64;
+
+  static void add_delta(Level& L, Index I, Index J, const Mat<d>& M) {
+    const Index pos = L.A.find(I, J);
+    Index& s = L.slot[pos];
+    if (s < 0) {
+      s = (Index)L.delta.size();
+      L.delta.push_back({pos, I, J, M});
+    } else {
+      L.delta[s].M += M;
+    }
+  }
 
   static void set_bounded(Level& L, bool bounded) {
     L.any_bounds = false;
@@ -96,7 +178,7 @@ class CoarseCorrection {
 
   void sweep(Level& L, bool forward) {
     if (L.any_bounds)
-      projected_gs_sweep<d>(L.A, L.Dinv, L.bounded, L.lo.data(), L.hi.data(), L.b.data(), L.x.data(), forward);
+      projected_gs_sweep<d>(L.A, L.Dinv, L.bounded, L.inert, L.lo.data(), L.hi.data(), L.b.data(), L.x.data(), forward);
     else
       block_gs_sweep<d>(L.A, L.Dinv, L.b.data(), L.x.data(), forward);
   }
@@ -137,12 +219,11 @@ class CoarseCorrection {
         for (int a = 0; a < d; ++a)
           for (int b = 0; b < d; ++b) {
             const double v = A.block(k)(a, b);
-            if (v != 0) t.emplace_back(i * d + a, A.indices[k] * d + b, v);
+            if (v != 0 && !lv_[0].inert[i * d + a] && !lv_[0].inert[A.indices[k] * d + b]) t.emplace_back(i * d + a, A.indices[k] * d + b, v);
           }
     // empty rows (truncated or unused dofs) become identity rows: their right-hand side is zero
-    for (Index i = 0; i < A.rows; ++i)
-      for (int a = 0; a < d; ++a)
-        if (A.block(A.diag[i])(a, a) == 0) t.emplace_back(i * d + a, i * d + a, 1.0);
+    for (Index k = 0; k < n; ++k)
+      if (lv_[0].inert[k]) t.emplace_back(k, k, 1.0);
     Eigen::SparseMatrix<double> S(n, n);
     S.setFromTriplets(t.begin(), t.end());
     if (!analyzed_) { ldlt_.analyzePattern(S); analyzed_ = true; }
@@ -192,7 +273,8 @@ class CoarseCorrection {
   std::vector<double> scratch_lo_, scratch_hi_;
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt_;
   bool analyzed_ = false;
-  int rebuilds_ = 0;
+  int rebuilds_ = 0, incremental_ = 0;
+  double rebuild_seconds_ = 0;
 };
 
 }  // namespace cmg

@@ -40,7 +40,7 @@ struct SolveResult {
   bool converged = false;
   std::string status;
   int cycles = 0, outer_iterations = 0, rebuilds = 0;
-  double seconds = 0;
+  double seconds = 0, rebuild_seconds = 0;
 };
 
 // Orthonormal frame with first column n: 2D t = n rotated by +90 degrees; 3D t orthogonal to n
@@ -112,7 +112,7 @@ class ContactSolver {
     to_local_frames();
     eliminate_dirichlet(fixed_values);
     A_.find_diagonal();
-    invert_diagonal<d>(A_, Dinv_);
+    invert_diagonal<d>(A_, Dinv_, inert_, max_diagonal<d>(A_));
     base_mask_.assign(n * d, 1);
     for (Index k = 0; k < n * d; ++k) base_mask_[k] = fixed_[k] ? 0 : 1;
     mask_ = base_mask_;
@@ -133,6 +133,8 @@ class ContactSolver {
   std::size_t memory_bytes() const {
     return A_.memory_bytes() + cc_.memory_bytes() + sizeof(double) * (Dinv_.size() + 9 * u_.size());
   }
+  // Full Galerkin rebuild for the current truncation (diagnostics: compare with the incremental one).
+  void rebuild_coarse() { cc_.rebuild(A_, built_mask_.data()); }
   void set_interrupt_check(std::function<bool()> f) { interrupted_ = std::move(f); }
   void set_tresca_bounds(const double* s) {
     for (Index c = 0; c < num_contact(); ++c) {
@@ -262,6 +264,8 @@ class ContactSolver {
 
   void start(const double* u0) {
     const Index n = A_.rows;
+    rebuilds0_ = cc_.rebuilds();
+    rebuild_seconds0_ = cc_.rebuild_seconds();
     if (u0) {
       for (Index k = 0; k < n * d; ++k)
         if (!std::isfinite(u0[k])) throw InputError("the initial guess has a non-finite entry");
@@ -351,7 +355,7 @@ class ContactSolver {
     const bool bounded = linearize<L>();
     rebuilt = mask_ != built_mask_;
     if (rebuilt) {
-      cc_.rebuild(A_, mask_.data());
+      cc_.update(A_, built_mask_.data(), mask_.data());
       built_mask_ = mask_;
     }
     cc_.apply(r_.data(), mask_.data(), lo_.data(), hi_.data(), bounded, u_.data());
@@ -416,7 +420,8 @@ class ContactSolver {
   void finish(SolveResult& R, clock::time_point t0) {
     const Index n = A_.rows, nc = num_contact();
     R.seconds = std::chrono::duration<double>(clock::now() - t0).count();
-    R.rebuilds = cc_.rebuilds();
+    R.rebuilds = cc_.rebuilds() - rebuilds0_;
+    R.rebuild_seconds = cc_.rebuild_seconds() - rebuild_seconds0_;
     R.u = u_;
     R.contact_force.assign(nc * d, 0.0);
     R.friction_bound.assign(nc, 0.0);
@@ -441,11 +446,13 @@ class ContactSolver {
   CoarseCorrection<d> cc_;
   CycleOptions cyc_;
   std::vector<double> f_, Dinv_, u_, Au_, r_, tmp_, old_, lo_, hi_, fixed_values_;
-  std::vector<std::uint8_t> fixed_, base_mask_, mask_, built_mask_;
+  std::vector<std::uint8_t> inert_, fixed_, base_mask_, mask_, built_mask_;
   std::vector<Index> contact_node_, contact_of_node_;
   std::vector<double> gap_, coef_, bound_;
   std::vector<Mat<d>> frames_;
   double energy_offset_ = 0;
+  int rebuilds0_ = 0;
+  double rebuild_seconds0_ = 0;
   std::function<bool()> interrupted_;
 };
 

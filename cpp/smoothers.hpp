@@ -5,17 +5,34 @@
 
 namespace cmg {
 
-// Inverted diagonal blocks. A component whose diagonal entry is exactly zero has an empty row and
-// column (a truncated or unused dof): it is inverted as identity, so with a zero right-hand side
-// it stays zero.
+// Largest diagonal entry: the scale of the inert-dof test below.
 template <int d>
-void invert_diagonal(const BlockMatrix<d>& A, std::vector<double>& Dinv) {
+double max_diagonal(const BlockMatrix<d>& A) {
+  double m = 0;
+  for (Index i = 0; i < A.rows; ++i)
+    if (A.diag[i] >= 0)
+      for (int c = 0; c < d; ++c) m = std::max(m, A.block(A.diag[i])(c, c));
+  return m;
+}
+
+// Inverted diagonal blocks of the rows [first, last). A component whose diagonal entry is zero up
+// to round-off (relative to `scale`) has an empty row and column — a truncated or unused dof, or
+// one emptied by incremental coarse updates: it is inert, inverted as identity, and with its
+// (zero) right-hand side it stays zero.
+template <int d>
+void invert_diagonal(const BlockMatrix<d>& A, std::vector<double>& Dinv, std::vector<std::uint8_t>& inert, double scale,
+                     Index first = 0, Index last = -1) {
+  if (last < 0) last = A.rows;
   Dinv.resize(A.rows * d * d);
-  for (Index i = 0; i < A.rows; ++i) {
+  inert.resize(A.rows * d);
+  const double thr = 1e-12 * scale;
+  for (Index i = first; i < last; ++i) {
     Mat<d> D = Mat<d>::Zero();
     if (A.diag[i] >= 0) D = A.block(A.diag[i]);
-    for (int c = 0; c < d; ++c)
-      if (D(c, c) == 0) { D.row(c).setZero(); D.col(c).setZero(); D(c, c) = 1; }
+    for (int c = 0; c < d; ++c) {
+      inert[i * d + c] = D(c, c) <= thr;
+      if (inert[i * d + c]) { D.row(c).setZero(); D.col(c).setZero(); D(c, c) = 1; }
+    }
     MatMap<d>(Dinv.data() + i * d * d) = D.inverse();
   }
 }
@@ -42,7 +59,7 @@ void block_gs_sweep(const BlockMatrix<d>& A, const std::vector<double>& Dinv, co
 // component-wise exact minimization with clamping (each step lowers the quadratic energy).
 template <int d>
 void projected_gs_sweep(const BlockMatrix<d>& A, const std::vector<double>& Dinv, const std::vector<std::uint8_t>& bounded,
-                        const double* lo, const double* hi, const double* b, double* x, bool forward) {
+                        const std::vector<std::uint8_t>& inert, const double* lo, const double* hi, const double* b, double* x, bool forward) {
   const Index n = A.rows;
   for (Index ii = 0; ii < n; ++ii) {
     const Index i = forward ? ii : n - 1 - ii;
@@ -54,7 +71,7 @@ void projected_gs_sweep(const BlockMatrix<d>& A, const std::vector<double>& Dinv
     }
     const auto D = A.block(A.diag[i]);
     for (int c = 0; c < d; ++c) {
-      if (D(c, c) == 0) continue;
+      if (inert[d * i + c]) continue;
       double v = s[c];
       for (int a = 0; a < d; ++a)
         if (a != c) v -= D(c, a) * xi[a];

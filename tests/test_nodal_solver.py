@@ -1,0 +1,135 @@
+"""The exact nodal solver (DESIGN section 3) against independent minimizations of the local problem
+    min 1/2 x^T B x - b^T x + s |x_T|  subject to x_n <= g."""
+import itertools
+
+import numpy as np
+import pytest
+
+from contactmg import _core
+
+SOLVE_T = {2: _core.solve_node_tresca_2D, 3: _core.solve_node_tresca_3D}
+SOLVE_C = {2: _core.solve_node_coulomb_2D, 3: _core.solve_node_coulomb_3D}
+
+
+def energy(B, b, s, x):
+    return 0.5 * x @ B @ x - b @ x + s * np.linalg.norm(x[1:])
+
+
+def assert_kkt(B, b, g, s, x, fix_normal=False, tol=1e-10):
+    """First-order conditions, necessary and sufficient for this convex problem."""
+    G = B @ x - b
+    scale = 1 + np.abs(b).max() + np.abs(B).max() * np.abs(x).max()
+    if not fix_normal:
+        assert x[0] <= g
+        if x[0] < g:
+            assert abs(G[0]) <= tol * scale
+        else:
+            assert G[0] <= tol * scale
+    xt = x[1:]
+    if np.all(xt == 0):
+        assert np.linalg.norm(G[1:]) <= s + tol * scale
+    else:
+        np.testing.assert_allclose(G[1:], -s * xt / np.linalg.norm(xt), atol=tol * scale)
+
+
+def assert_no_better_point(B, b, g, s, x, rng, fix_normal=False, trials=2000):
+    """Brute force: no feasible point in a cloud around x (radii 1e-6..1) has lower energy."""
+    e0 = energy(B, b, s, x)
+    for r in (1e-6, 1e-4, 1e-2, 1.0):
+        Y = x + r * rng.normal(size=(trials // 4, len(x)))
+        Y[:, 0] = g if fix_normal else np.minimum(Y[:, 0], g)
+        e = 0.5 * np.einsum("ki,ij,kj->k", Y, B, Y) - Y @ b + s * np.linalg.norm(Y[:, 1:], axis=1)
+        assert e.min() >= e0 - 1e-13 * (1 + abs(e0))
+
+
+def enumerate_2d(B, b, g, s):
+    """2D only: enumerate the pieces (x_n free or on g; x_T = 0, > 0 or < 0) and keep the best
+    feasible stationary point."""
+    best, best_e = None, np.inf
+    for normal_on_gap, sign in itertools.product([False, True], [0, 1, -1]):
+        x = np.zeros(2)
+        if normal_on_gap:
+            x[0] = g
+            if sign:
+                x[1] = (b[1] - B[1, 0] * g - s * sign) / B[1, 1]
+        else:
+            if sign:
+                x[:] = np.linalg.solve(B, b - np.array([0, s * sign]))
+            else:
+                x[0] = b[0] / B[0, 0]
+        if x[0] > g + 1e-14 or (sign and np.sign(x[1]) != sign):
+            continue
+        e = energy(B, b, s, x)
+        if e < best_e:
+            best, best_e = x, e
+    return best
+
+
+def random_case(rng, d):
+    M = rng.normal(size=(d, d))
+    B = M @ M.T + 0.3 * np.eye(d)
+    b = rng.normal(size=d) * 2
+    g = rng.normal() * 0.5
+    s = abs(rng.normal()) * rng.choice([0, 0.3, 1, 3])
+    return B, b, g, s
+
+
+@pytest.mark.parametrize("d", [2, 3])
+def test_tresca_node_is_the_minimizer(d):
+    rng = np.random.default_rng(7 + d)
+    regimes = set()
+    for _ in range(200):
+        B, b, g, s = random_case(rng, d)
+        x = SOLVE_T[d](B, b, g, s)
+        assert_kkt(B, b, g, s, x)
+        assert_no_better_point(B, b, g, s, x, rng)
+        regimes.add((x[0] == g, bool(np.all(x[1:] == 0))))
+        # exact assignments: on the gap exactly g, stuck exactly 0
+        assert x[0] <= g
+    assert len(regimes) == 4  # free/on-gap x slip/stick all exercised
+
+
+def test_tresca_node_2d_matches_enumeration():
+    rng = np.random.default_rng(3)
+    for _ in range(500):
+        B, b, g, s = random_case(rng, 2)
+        np.testing.assert_allclose(_core.solve_node_tresca_2D(B, b, g, s), enumerate_2d(B, b, g, s), atol=1e-12)
+
+
+@pytest.mark.parametrize("d", [2, 3])
+def test_coulomb_node_rule(d):
+    """Frictionless trial first; a node left off the obstacle carries no friction; otherwise it sits
+    on the gap with the bound F |s_n| taken at (g, old x_T)."""
+    rng = np.random.default_rng(11 + d)
+    seen = {"off": 0, "on": 0}
+    for _ in range(200):
+        B, b, g, _ = random_case(rng, d)
+        F = rng.choice([0.1, 0.5, 2.0, 40.0])
+        old = rng.normal(size=d) * 0.3
+        x = SOLVE_C[d](B, b, g, F, old)
+        trial = SOLVE_T[d](B, b, g, 0.0)
+        if trial[0] < g:
+            seen["off"] += 1
+            np.testing.assert_allclose(x, trial, atol=1e-13)
+            continue
+        seen["on"] += 1
+        assert x[0] == g
+        sn = B[0, 0] * g + B[0, 1:] @ old[1:] - b[0]
+        s = F * max(0.0, -sn)
+        assert_kkt(B, b, g, s, x, fix_normal=True)
+        assert_no_better_point(B, b, g, s, x, rng, fix_normal=True)
+    assert seen["off"] > 10 and seen["on"] > 10
+
+
+def test_3d_slip_direction_opposes_friction_force():
+    """In 3D the sliding solution satisfies S x_T - c = -s x_T/|x_T| (stationarity)."""
+    rng = np.random.default_rng(5)
+    for _ in range(100):
+        B, b, g, _ = random_case(rng, 3)
+        s = 0.2
+        x = _core.solve_node_tresca_3D(B, b, 1e3, s)  # gap far away: normal free
+        if np.linalg.norm(x[1:]) == 0:
+            continue
+        grad = B @ x - b
+        np.testing.assert_allclose(grad[0], 0, atol=1e-12)
+        np.testing.assert_allclose(grad[1:], -s * x[1:] / np.linalg.norm(x[1:]), atol=1e-11)
