@@ -22,11 +22,12 @@ CYCLES = ("V", "W", "F")
 
 @dataclass(frozen=True)
 class Dirichlet:
-    """Prescribed displacement on the boundary facets with the given tags; a component given as
-    None stays free."""
+    """Prescribed displacement on the nodes of the boundary facets with the given tags: a constant
+    vector (a component given as None stays free) or a callable x (m, d) -> (m, d) values, which
+    fixes every component."""
 
     tags: Sequence[int]
-    value: Sequence[Optional[float]]
+    value: Union[Sequence[Optional[float]], Callable[[np.ndarray], np.ndarray]]
 
 
 @dataclass
@@ -90,11 +91,15 @@ class ContactProblem:
         self.fixed = np.zeros((n, d), dtype=np.uint8)
         self.fixed_values = np.zeros((n, d))
         for bc in dirichlet:
-            if len(bc.value) != d:
-                raise ValueError(f"a Dirichlet value needs {d} components (None for free), got {len(bc.value)}")
             nodes = mesh.boundary_nodes(bc.tags)
             if len(nodes) == 0:
                 raise ValueError(f"no boundary facet carries the Dirichlet tags {list(bc.tags)}")
+            if callable(bc.value):
+                self.fixed[nodes] = 1
+                self.fixed_values[nodes] = _field(bc.value, mesh.points[nodes], "Dirichlet value")
+                continue
+            if len(bc.value) != d:
+                raise ValueError(f"a Dirichlet value needs {d} components (None for free), got {len(bc.value)}")
             for a, v in enumerate(bc.value):
                 if v is not None:
                     if not np.isfinite(v):

@@ -1,0 +1,45 @@
+# Fresh machine: `make demo` runs the Hertz benchmark with its plots, `make test` runs the tests.
+# Both install what is missing first (Eigen through apt-get, the package with its test extras).
+PYTHON ?= python3
+OUT ?= out
+LEVELS ?= 7
+FRICTION ?= 0.4
+PIP = $(PYTHON) -m pip install --disable-pip-version-check -q
+
+.PHONY: setup demo test test-all benchmark sanitize clean
+
+setup:
+	@if [ ! -f /usr/include/eigen3/Eigen/Core ]; then \
+	  echo "installing libeigen3-dev"; \
+	  if [ "$$(id -u)" = 0 ]; then apt-get update -qq && apt-get install -y -qq libeigen3-dev; \
+	  else sudo apt-get update -qq && sudo apt-get install -y -qq libeigen3-dev; fi; fi
+	$(PIP) "scikit-build-core>=0.10" "pybind11>=2.12" numpy
+	$(PIP) --no-build-isolation -e ".[test]"
+
+demo: setup
+	mkdir -p $(OUT)
+	$(PYTHON) -m contactmg hertz --levels $(LEVELS) --friction $(FRICTION) \
+	  --json $(OUT)/hertz.json --vtu $(OUT)/hertz.vtu --plot $(OUT)/hertz_stress.png
+	@echo "wrote $(OUT)/hertz.json $(OUT)/hertz.vtu $(OUT)/hertz_stress.png"
+
+test: setup
+	$(PYTHON) -m pytest -q
+
+test-all: setup
+	$(PYTHON) -m pytest -q -m ""
+
+benchmark: setup
+	mkdir -p $(OUT)
+	$(PYTHON) benchmarks/run_all.py --out $(OUT)
+
+# C++ core under AddressSanitizer and UndefinedBehaviorSanitizer, tests run against it.
+sanitize:
+	$(PIP) "scikit-build-core>=0.10" "pybind11>=2.12" numpy
+	CMAKE_ARGS="-DCONTACTMG_SANITIZE=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo" $(PIP) --no-build-isolation \
+	  -Cbuild-dir=build/sanitize -e ".[test]"
+	ASAN_OPTIONS=detect_leaks=0 LD_PRELOAD="$$(gcc -print-file-name=libasan.so) $$(gcc -print-file-name=libubsan.so)" \
+	  UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 $(PYTHON) -m pytest -q -x tests -k "not notebook"
+	$(PIP) --no-build-isolation -e ".[test]"
+
+clean:
+	rm -rf build $(OUT)
