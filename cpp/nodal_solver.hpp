@@ -74,16 +74,26 @@ Vec<d> solve_node_tresca(const Mat<d>& B, const Vec<d>& b, double g, double s) {
 // carries no friction. Otherwise it sits on the gap and its bound is F |s_n| evaluated at
 // (g, old x_T) — not at the residual before the visit, which after a coarse correction can still be
 // compressive for a node about to lift off and would make it stick sideways while lifting.
+// s_n depends on the node's own x_T through the off-diagonal of its block, so the rule is repeated
+// with the new x_T until it stops changing (at most 100 times): the exact local Coulomb solution
+// where that local map contracts. At F = 8 and 40 this took Hertz level 7 from 24 and 49 cycles to 19.
 template <int d>
 Vec<d> solve_node_coulomb(const Mat<d>& B, const Vec<d>& b, double g, double F, const Vec<d>& old) {
   constexpr int m = d - 1;
   Vec<d> x = solve_node_tresca<d>(B, b, g, 0.0);
   if (x[0] < g || F <= 0) return x;
   const typename Tangential<d>::V BTn = B.template block<m, 1>(1, 0);
-  const double sn = B(0, 0) * g + BTn.dot(old.template tail<m>()) - b[0];  // (A u - f)_n with the node at (g, old x_T)
-  const double s = F * std::max(0.0, -sn);
   x[0] = g;
-  x.template tail<m>() = Tangential<d>::solve(B.template block<m, m>(1, 1), b.template tail<m>() - BTn * g, s);
+  typename Tangential<d>::V xt = old.template tail<m>();
+  for (int it = 0; it < 100; ++it) {
+    const double sn = B(0, 0) * g + BTn.dot(xt) - b[0];  // (A u - f)_n with the node at (g, x_T)
+    const double s = F * std::max(0.0, -sn);
+    typename Tangential<d>::V xn = Tangential<d>::solve(B.template block<m, m>(1, 1), b.template tail<m>() - BTn * g, s);
+    const bool same = (xn - xt).norm() <= 1e-15 * xn.norm();
+    xt = xn;
+    if (same) break;
+  }
+  x.template tail<m>() = xt;
   return x;
 }
 

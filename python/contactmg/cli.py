@@ -61,7 +61,7 @@ def _parser() -> argparse.ArgumentParser:
     h.add_argument("--method", choices=["nmg", "fixed-point", "linear"], default="nmg")
     h.add_argument("--tol", type=_nonneg_float("--tol", positive=True), default=1e-11)
     h.add_argument("--max-cycles", type=_positive_int("--max-cycles"), default=200)
-    h.add_argument("--cycle", choices=["V", "W", "F"], default="V")
+    h.add_argument("--cycle", choices=["V", "W", "F"], default="F")
     h.add_argument("--nu1", type=_positive_int("--nu1", 0, 100), default=3)
     h.add_argument("--nu2", type=_positive_int("--nu2", 0, 100), default=3)
     h.add_argument("--json", type=_writable, metavar="PATH|-")

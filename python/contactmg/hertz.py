@@ -19,7 +19,7 @@ PAPER_FRICTIONS = (0.08, 0.4, 0.7, 0.9, 1.0, 1.1, 2.0, 5.0, 8.0, 40.0)
 
 
 def hertz_problem(cell: str = "triangle", levels: int = 6, friction: float = 0.4, coulomb_at_zero: bool = False,
-                  cycle: str = "V", nu1: int = 3, nu2: int = 3, material: Material = None) -> ContactProblem:
+                  cycle: str = "F", nu1: int = 3, nu2: int = 3, material: Material = None) -> ContactProblem:
     """Lower half disk (centre (0, 0.4), radius 0.4) pushed by u = (0, -0.005) on its top edge onto
     the rigid plane y = 0, with Coulomb friction F (frictionless for F = 0 unless
     coulomb_at_zero, which the fixed-point method needs)."""

@@ -62,7 +62,7 @@ class ContactProblem:
     def __init__(self, hierarchy: MeshHierarchy, material: Material, dirichlet: Sequence[Dirichlet],
                  contact_tags: Sequence[int] = (), obstacle=None, friction=None,
                  body_force: Optional[VectorField] = None, traction: Optional[Dict[int, VectorField]] = None,
-                 cycle: str = "V", nu1: int = 3, nu2: int = 3):
+                 cycle: str = "F", nu1: int = 3, nu2: int = 3):
         if not isinstance(hierarchy, MeshHierarchy):
             raise TypeError("hierarchy must be a MeshHierarchy")
         if not isinstance(material, Material):
