@@ -77,10 +77,11 @@ def polar_half_disk(center=(0.0, 0.4), radius: float = 0.4, rings: int = 3, segm
     for k in range(1, rings + 1):
         m = segments * k
         th = np.pi + np.pi * np.arange(m + 1) / m
-        ring = radius * k / rings * np.c_[np.cos(th), np.sin(th)]
+        r = radius * (k / rings)  # exactly radius on the outer ring
+        ring = r * np.c_[np.cos(th), np.sin(th)]
         ring[[0, -1], 1] = 0.0
         if m % 2 == 0:
-            ring[m // 2] = [0.0, -radius * k / rings]
+            ring[m // 2] = [0.0, -r]
         pts.append(ring)
         ids.append(np.arange(n, n + m + 1))
         n += m + 1

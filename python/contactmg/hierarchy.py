@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import os
+import time
 from dataclasses import dataclass, field
 from typing import Callable, List, Optional, Tuple
 
@@ -74,6 +75,7 @@ class MeshHierarchy:
 
     meshes: List[Mesh]
     transfers: List[Transfer] = field(default_factory=list)
+    build_seconds: float = 0.0
 
     @property
     def finest(self) -> Mesh:
@@ -93,6 +95,7 @@ class MeshHierarchy:
             raise TypeError(f"levels must be an integer, got {type(levels).__name__}")
         if levels < 1:
             raise ValueError(f"levels must be at least 1, got {levels}")
+        t0 = time.perf_counter()
         need = estimate_memory_bytes(mesh, levels)
         have = available_memory_bytes()
         if need > memory_fraction * have:
@@ -115,4 +118,4 @@ class MeshHierarchy:
             fine = Mesh(points, r["cells"], m.cell_type, r["facets"], r["facet_tags"])
             meshes.append(fine)
             transfers.append(Transfer(fine.num_points, m.num_points, r["ptr"], r["parent"], r["weight"]))
-        return cls(meshes, transfers)
+        return cls(meshes, transfers, time.perf_counter() - t0)

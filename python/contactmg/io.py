@@ -26,8 +26,8 @@ def read_mesh(source: Union[str, os.PathLike, meshio.Mesh], dim: Optional[int] =
             raise ValueError(f"cannot read mesh {path}: no such file")
         try:
             m = meshio.read(path)
-        except Exception as e:  # meshio raises many kinds
-            raise ValueError(f"cannot read mesh {path}: {e}") from e
+        except (Exception, SystemExit) as e:  # meshio raises many kinds, and exits on some files
+            raise ValueError(f"cannot read mesh {path}: {e or type(e).__name__}") from None
     types = [b.type for b in m.cells]
     volume = [t for t in types if t in ("tetra", "hexahedron")] or [t for t in types if t in _UNSUPPORTED_3D]
     if not volume:
@@ -99,5 +99,5 @@ def write_mesh(path: Union[str, os.PathLike], mesh: Mesh, point_data: Optional[D
     m = to_meshio(mesh, point_data)
     try:
         meshio.write(path, m, **kwargs)
-    except Exception as e:
-        raise ValueError(f"cannot write {path}: {e}") from e
+    except (Exception, SystemExit) as e:
+        raise ValueError(f"cannot write {path}: {e or type(e).__name__}") from None

@@ -133,6 +133,8 @@ class Mesh:
     def from_cells(cls, points, cells, cell_type: str,
                    tagger: Optional[Callable[[np.ndarray], np.ndarray]] = None) -> "Mesh":
         """Mesh with boundary facets computed from the cells; `tagger(midpoints) -> tags`."""
+        if cell_type not in CELL_NODES:
+            raise ValueError(f"unknown cell type {cell_type!r} (expected one of {sorted(CELL_NODES)})")
         tmp = cls(points, cells, cell_type, np.zeros((0, FACET_NODES[cell_type]), np.int64), np.zeros(0, np.int64))
         facets = boundary_facets(tmp.cells, cell_type)
         tags = np.zeros(len(facets), np.int64)
