@@ -115,7 +115,7 @@ class MeshHierarchy:
                     raise ValueError(f"the boundary projector returned shape {moved.shape}, expected {(len(nb), m.dim)}")
                 points[nb] = moved
             _core.check_cells(points, r["cells"], m.cell_type)
-            fine = Mesh(points, r["cells"], m.cell_type, r["facets"], r["facet_tags"])
+            fine = Mesh._trusted(points, r["cells"], m.cell_type, r["facets"], r["facet_tags"])
             meshes.append(fine)
             transfers.append(Transfer(fine.num_points, m.num_points, r["ptr"], r["parent"], r["weight"]))
         return cls(meshes, transfers, time.perf_counter() - t0)

@@ -130,6 +130,14 @@ class Mesh:
 
     # -- construction ---------------------------------------------------------------------------
     @classmethod
+    def _trusted(cls, points, cells, cell_type, facets, facet_tags) -> "Mesh":
+        """A mesh made by the core's refinement, whose cells the core has checked (positive
+        Jacobians): skips the Python validation, which costs seconds on million-node levels."""
+        m = object.__new__(cls)
+        m.points, m.cells, m.cell_type, m.facets, m.facet_tags = points, cells, cell_type, facets, facet_tags
+        return m
+
+    @classmethod
     def from_cells(cls, points, cells, cell_type: str,
                    tagger: Optional[Callable[[np.ndarray], np.ndarray]] = None) -> "Mesh":
         """Mesh with boundary facets computed from the cells; `tagger(midpoints) -> tags`."""
