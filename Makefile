@@ -20,7 +20,9 @@ demo: setup
 	mkdir -p $(OUT)
 	$(PYTHON) -m contactmg hertz --levels $(LEVELS) --friction $(FRICTION) \
 	  --json $(OUT)/hertz.json --vtu $(OUT)/hertz.vtu --plot $(OUT)/hertz_stress.png
-	@echo "wrote $(OUT)/hertz.json $(OUT)/hertz.vtu $(OUT)/hertz_stress.png"
+	$(PYTHON) -m contactmg table1 --json $(OUT)/table1.json --plot $(OUT)/table1.png
+	@echo "wrote $(OUT)/hertz.json $(OUT)/hertz.vtu $(OUT)/hertz_stress.png (Figure 2 middle)" \
+	  "$(OUT)/table1.json $(OUT)/table1.png (Table 1, Figure 1)"
 
 test: setup
 	$(PYTHON) -m pytest -q

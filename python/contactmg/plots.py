@@ -77,3 +77,66 @@ def plot_correction_history(results, ax=None, labels=None):
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
     return ax
+
+
+def plot_table1(table, ax=None):
+    """Table 1 as an image: fixed-point iterations per friction coefficient (rows) and dofs
+    (columns), "no conv." where Algorithm 1 failed."""
+    ax = _axes(ax, figsize=(8, 4))
+    cells = [[("no conv." if v is None else str(v)) for v in row] for row in table["fixed_point_iterations"]]
+    t = ax.table(cellText=cells, rowLabels=[f"{F:g}" for F in table["frictions"]],
+                 colLabels=[f"{d:,}" for d in table["dofs"]], loc="center", cellLoc="center")
+    t.auto_set_font_size(False)
+    t.set_fontsize(8)
+    t.scale(1, 1.3)
+    ax.axis("off")
+    ax.set_title("Table 1: fixed-point iterations (F \\ dofs)")
+    return ax
+
+
+def plot_convergence(table, ax=None, frictions=None):
+    """Figure 1 left: total V-cycles against the number of nodes (log axis), Algorithm 1 (fixed
+    point) blue and Algorithm 2 (nmg) red, one curve per friction coefficient."""
+    ax = _axes(ax, figsize=(6, 4.5))
+    nodes = np.asarray(table["nodes"])
+    frictions = table["frictions"] if frictions is None else frictions
+    markers = "os^vD<>ph*"
+    for k, F in enumerate(table["frictions"]):
+        if F not in frictions:
+            continue
+        m = markers[k % len(markers)]
+        ax.semilogx(nodes, table["fixed_point_vcycles"][k], "-", color="tab:blue", marker=m, ms=4, lw=1,
+                    label=f"Alg. 1, F={F:g}")
+        ax.semilogx(nodes, table["nmg_vcycles"][k], "-", color="tab:red", marker=m, ms=4, lw=1, label=f"Alg. 2, F={F:g}")
+    ax.set_xlabel("number of nodes")
+    ax.set_ylabel("number of V-cycles")
+    ax.set_title("Figure 1 (left): Algorithm 1 blue, Algorithm 2 red")
+    ax.legend(fontsize=6, ncol=2)
+    return ax
+
+
+def plot_fixed_point_iterations(table, ax=None):
+    """Figure 1 right: fixed-point iterations against level and friction coefficient (3D bars;
+    "no conv." drawn as a red bar at the iteration limit)."""
+    if ax is None:
+        import matplotlib.pyplot as plt
+
+        ax = plt.figure(figsize=(6, 5)).add_subplot(projection="3d")
+    levels = table["levels"]
+    F = table["frictions"]
+    its = table["fixed_point_iterations"]
+    top = max([v for row in its for v in row if v is not None] + [1])
+    for i in range(len(F)):
+        for j in range(len(levels)):
+            v = its[i][j]
+            ax.bar3d(j, i, 0, 0.6, 0.6, top * 1.1 if v is None else v, color="tab:red" if v is None else "tab:blue",
+                     alpha=0.8, shade=True)
+    ax.set_xticks(np.arange(len(levels)) + 0.3)
+    ax.set_xticklabels([str(L) for L in levels])
+    ax.set_yticks(np.arange(len(F)) + 0.3)
+    ax.set_yticklabels([f"{f:g}" for f in F], fontsize=7)
+    ax.set_xlabel("level")
+    ax.set_ylabel("F")
+    ax.set_zlabel("iterations")
+    ax.set_title("Figure 1 (right): fixed-point iterations (red: no conv.)")
+    return ax
