@@ -176,7 +176,6 @@ class ContactSolver {
     const Index nc = num_contact();
     std::vector<double> sn_prev(nc), sn(nc);
     normal_stress(sn_prev);
-    R.status = "no convergence of the fixed-point iteration in " + std::to_string(opt.fixed_point_max) + " outer iterations";
     for (int k = 1; k <= opt.fixed_point_max; ++k) {
       for (Index c = 0; c < nc; ++c) bound_[c] = coef_[c] * std::abs(sn_prev[c]);
       R.outer_iterations = k;
@@ -198,6 +197,7 @@ class ContactSolver {
       sn_prev = sn;
     }
     R.converged = false;
+    R.status = "no convergence of the fixed-point iteration in " + std::to_string(opt.fixed_point_max) + " outer iterations";
     finish(R, t0);
     return R;
   }

@@ -1,0 +1,71 @@
+"""Algorithm 1 (fixed point in the normal stresses) against Algorithm 2 (issue 4)."""
+import numpy as np
+import pytest
+
+from contactmg import hertz
+
+
+def energy_norm(p, u):
+    return float(np.sqrt(u.ravel() @ p.A.matvec(u).ravel()))
+
+
+@pytest.mark.parametrize("cell", ["triangle", "quad"])
+@pytest.mark.parametrize("F", [0.08, 0.4, 1.0])
+def test_fixed_point_reaches_the_nmg_solution(cell, F):
+    p = hertz.hertz_problem(cell, 5, F)
+    fp = p.solve("fixed-point")
+    nm = p.solve("nmg")
+    assert fp.converged and nm.converged, (fp.status, nm.status)
+    assert fp.outer_iterations >= 2
+    rel = energy_norm(p, fp.displacement - nm.displacement) / energy_norm(p, nm.displacement)
+    assert rel <= 1e-8, rel
+    np.testing.assert_array_equal(fp.contact_state, nm.contact_state)
+
+
+def test_outer_iterations_grow_with_level_while_nmg_cycles_do_not():
+    its, fp_cycles, nmg_cycles = {}, {}, {}
+    for F in (0.7, 2.0):
+        its[F], fp_cycles[F], nmg_cycles[F] = [], [], []
+        for L in (3, 4, 5, 6, 7):
+            p = hertz.hertz_problem("triangle", L, F)
+            fp, nm = p.solve("fixed-point"), p.solve("nmg")
+            assert fp.converged and nm.converged
+            its[F].append(fp.outer_iterations)
+            fp_cycles[F].append(fp.cycles)
+            nmg_cycles[F].append(nm.cycles)
+    msg = f"fixed-point iterations {its}, nmg cycles {nmg_cycles}"
+    for F in its:
+        assert its[F][-1] >= 3 * its[F][0], msg          # e.g. 3 -> 11 for F = 0.7
+        assert its[F][-1] >= its[F][-2] >= its[F][-3], msg
+        assert max(nmg_cycles[F][-2:]) <= max(nmg_cycles[F][:3]) + 3, msg
+    # on the finest level Algorithm 1 costs several times the V-cycles of Algorithm 2
+    assert fp_cycles[0.7][-1] >= 4 * nmg_cycles[0.7][-1], msg
+
+
+def test_fixed_point_costs_several_times_more_cycles_at_f_0_4():
+    p = hertz.hertz_problem("triangle", 7, 0.4)
+    fp, nm = p.solve("fixed-point"), p.solve("nmg")
+    ratio = fp.cycles / nm.cycles
+    print(f"F = 0.4, level 7: fixed point {fp.outer_iterations} outer / {fp.cycles} V-cycles, nmg {nm.cycles}: {ratio:.1f}x")
+    assert fp.converged and nm.converged
+    assert ratio >= 3, ratio
+
+
+def test_fixed_point_slows_down_for_f_5_on_finer_levels():
+    """The paper's Algorithm 1 fails for F = 5 on its finer, contact-refined levels; on the uniform
+    levels the suite affords it converges but needs many more outer iterations as h shrinks (here
+    3 at level 3, about 55 at level 7), while Algorithm 2 keeps its cycle count."""
+    out = {}
+    for L in (3, 7):
+        p = hertz.hertz_problem("triangle", L, 5.0)
+        fp = p.solve("fixed-point")
+        out[L] = fp.outer_iterations if fp.converged else np.inf
+    print("F = 5 outer iterations", out)
+    assert out[7] >= 5 * out[3], out
+
+
+def test_fixed_point_reports_non_convergence():
+    p = hertz.hertz_problem("triangle", 6, 2.0)
+    res = p.solve("fixed-point", fixed_point_max=3)
+    assert not res.converged and res.outer_iterations == 3
+    assert "no convergence" in res.status
