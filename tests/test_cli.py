@@ -1,0 +1,101 @@
+"""The command line contract (DESIGN section 9): JSON keys, exit statuses, one-line errors."""
+import json
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+
+import numpy as np
+import pytest
+
+KEYS = ["problem", "dim", "cell", "levels", "nodes", "dofs", "method", "friction", "tol", "converged", "cycles",
+        "outer_iterations", "setup_seconds", "solve_seconds", "history", "contact_nodes", "stick_nodes", "slip_nodes",
+        "contact_halfwidth", "stick_halfwidth", "reaction", "max_normal_stress", "peak_rss_mb"]
+
+
+def run(*args, timeout=120):
+    return subprocess.run([sys.executable, "-m", "contactmg", *args], capture_output=True, text=True, timeout=timeout)
+
+
+@pytest.mark.parametrize("method", ["nmg", "fixed-point", "linear"])
+def test_hertz_json(tmp_path, method):
+    r = run("hertz", "--levels", "4", "--method", method, "--json", "-", "-q")
+    assert r.returncode == 0, r.stderr
+    d = json.loads(r.stdout)
+    assert all(k in d for k in KEYS), set(KEYS) - set(d)
+    assert d["method"] == method and d["levels"] == 4 and d["dofs"] == 2 * d["nodes"] and d["converged"]
+    assert (d["outer_iterations"] is None) == (method != "fixed-point")
+    assert len(d["history"]) == d["cycles"] and d["history"][-1]["correction_norm"] <= 1e-11
+    assert d["reaction"][1] > 0 and d["contact_nodes"] == d["stick_nodes"] + d["slip_nodes"]
+    assert d["stick_halfwidth"] <= d["contact_halfwidth"]
+
+
+def test_hertz_outputs_and_no_convergence_status(tmp_path):
+    js, vtu, png = tmp_path / "h.json", tmp_path / "h.vtu", tmp_path / "h.png"
+    r = run("hertz", "--levels", "5", "--cell", "quad", "--max-cycles", "3", "--json", str(js), "--vtu", str(vtu),
+            "--plot", str(png), "-q")
+    assert r.returncode == 3, r.stderr
+    d = json.loads(js.read_text())
+    assert d["converged"] is False and d["cycles"] == 3
+    assert vtu.stat().st_size > 1000 and png.read_bytes()[:4] == b"\x89PNG"
+
+
+@pytest.mark.parametrize("args,word", [
+    (["--friction", "-1"], "friction"), (["--friction", "nan"], "friction"), (["--tol", "0"], "tol"),
+    (["--tol", "nan"], "tol"), (["--levels", "0"], "levels"), (["--levels", "50"], "levels"),
+    (["--cell", "hexagon"], "cell"), (["--method", "newton"], "method"), (["--max-cycles", "0"], "max-cycles"),
+    (["--json", "/nonexistent/dir/x.json"], "/nonexistent"), (["--levels", "x"], "levels"),
+])
+def test_bad_arguments_exit_2_with_a_message(args, word):
+    r = run("hertz", *args)
+    assert r.returncode == 2
+    assert "Traceback" not in r.stderr
+    assert word in r.stderr.strip().splitlines()[-1]
+
+
+def test_table1_json():
+    r = run("table1", "--levels", "2", "3", "--frictions", "0.4", "5", "--json", "-", "-q")
+    assert r.returncode == 0, r.stderr
+    d = json.loads(r.stdout)
+    for k in ("levels", "dofs", "frictions", "fixed_point_iterations", "fixed_point_vcycles", "nmg_vcycles"):
+        assert k in d
+    assert d["levels"] == [2, 3] and d["frictions"] == [0.4, 5.0]
+    assert np.array(d["nmg_vcycles"]).shape == (2, 2) and np.array(d["fixed_point_vcycles"]).shape == (2, 2)
+    assert all(v > n for fr, nr in zip(d["fixed_point_vcycles"], d["nmg_vcycles"]) for v, n in zip(fr, nr))
+
+
+def test_ctrl_c_stops_a_long_solve_cleanly():
+    p = subprocess.Popen([sys.executable, "-m", "contactmg", "hertz", "--levels", "9", "--max-cycles", "500",
+                          "--tol", "1e-300"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    time.sleep(8)  # past the setup, inside the cycles
+    t0 = time.time()
+    p.send_signal(signal.SIGINT)
+    out, err = p.communicate(timeout=60)
+    assert time.time() - t0 < 10
+    assert p.returncode == 130 and "interrupted" in err and "Traceback" not in err
+
+
+def test_solve_releases_the_gil():
+    from contactmg import hertz
+
+    p = hertz.hertz_problem("triangle", 7, 0.4)
+    p.solver  # noqa: B018
+    count = [0]
+    done = threading.Event()
+
+    def spin():
+        while not done.is_set():
+            count[0] += 1
+
+    t = threading.Thread(target=spin)
+    t.start()
+    t0 = time.perf_counter()
+    before = count[0]
+    p.solve(tol=1e-300, max_cycles=20)
+    elapsed = time.perf_counter() - t0
+    during = count[0] - before
+    done.set()
+    t.join()
+    assert elapsed > 0.2 and during > 1000, (elapsed, during)
