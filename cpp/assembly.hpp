@@ -75,6 +75,9 @@ BlockMatrix<Element<T>::dim> assemble_elasticity(const double* points, Index n_p
     K.setZero();
     for (int q = 0; q < E::nq; ++q) {
       geo.at(X, E::qp[q].data());
+      if (!(geo.detJ > 0) || !std::isfinite(geo.detJ))
+        throw InputError("cell " + std::to_string(c) + " (" + cell_name(T) + ") is inverted or degenerate (det J = " +
+                         std::to_string(geo.detJ) + ")");
       const double w = E::qw[q] * geo.detJ;
       for (int a = 0; a < k; ++a)
         for (int b = 0; b < k; ++b) {
