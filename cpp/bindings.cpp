@@ -96,18 +96,18 @@ py::dict result_to_dict(const SolveResult& R, Index n, Index nc) {
   out["state"] = to_numpy(R.state, {(py::ssize_t)nc});
   const py::ssize_t h = R.history.size();
   py::array_t<int> cyc(h), outer(h);
-  py::array_t<double> cn(h), en(h), sec(h);
+  py::array_t<double> cn(h), en(h), sec(h), err(h);
   py::array_t<Index> act(h), st(h), sl(h);
   py::array_t<bool> rb(h);
   for (py::ssize_t k = 0; k < h; ++k) {
     const auto& r = R.history[k];
     cyc.mutable_at(k) = r.cycle; outer.mutable_at(k) = r.outer; cn.mutable_at(k) = r.correction_norm;
-    en.mutable_at(k) = r.energy; sec.mutable_at(k) = r.seconds; act.mutable_at(k) = r.active;
+    en.mutable_at(k) = r.energy; sec.mutable_at(k) = r.seconds; err.mutable_at(k) = r.error; act.mutable_at(k) = r.active;
     st.mutable_at(k) = r.stick; sl.mutable_at(k) = r.slip; rb.mutable_at(k) = r.rebuilt;
   }
   py::dict hist;
   hist["cycle"] = cyc; hist["outer"] = outer; hist["correction_norm"] = cn; hist["energy"] = en;
-  hist["seconds"] = sec; hist["active"] = act; hist["stick"] = st; hist["slip"] = sl; hist["rebuilt"] = rb;
+  hist["seconds"] = sec; hist["error"] = err; hist["active"] = act; hist["stick"] = st; hist["slip"] = sl; hist["rebuilt"] = rb;
   out["history"] = hist;
   out["converged"] = R.converged;
   out["status"] = R.status;
@@ -194,7 +194,7 @@ void bind_dim(py::module_& m) {
            py::arg("normals"), py::arg("gaps"), py::arg("coefficients"), py::arg("law"), py::arg("transfers"),
            py::arg("cycle") = "V", py::arg("nu1") = 3, py::arg("nu2") = 3)
       .def("solve", [](CS& S, py::object u0, double tol, double rtol, int max_cycles, bool fixed_point, double fp_tol,
-                       int fp_max) {
+                       int fp_max, py::object reference) {
              SolveOptions o;
              o.tol = tol; o.rtol = rtol; o.max_cycles = max_cycles; o.fixed_point_tol = fp_tol; o.fixed_point_max = fp_max;
              if (!(tol >= 0) || !(rtol >= 0) || !(tol > 0 || rtol > 0)) throw InputError("tolerances must be >= 0, one of them > 0");
@@ -205,6 +205,12 @@ void bind_dim(py::module_& m) {
                u = u0.cast<DArr>();
                require_shape(u, "u0", {(py::ssize_t)S.num_nodes(), d});
                up = u.data();
+             }
+             DArr ref;
+             if (!reference.is_none()) {
+               ref = reference.cast<DArr>();
+               require_shape(ref, "reference", {(py::ssize_t)S.num_nodes(), d});
+               o.reference = ref.data();
              }
              S.set_interrupt_check([] { py::gil_scoped_acquire g; return PyErr_CheckSignals() != 0; });
              SolveResult R;
@@ -219,7 +225,8 @@ void bind_dim(py::module_& m) {
              return result_to_dict<d>(R, S.num_nodes(), S.num_contact());
            },
            py::arg("u0") = py::none(), py::arg("tol") = 1e-11, py::arg("rtol") = 0.0, py::arg("max_cycles") = 200,
-           py::arg("fixed_point") = false, py::arg("fixed_point_tol") = 1e-9, py::arg("fixed_point_max") = 100)
+           py::arg("fixed_point") = false, py::arg("fixed_point_tol") = 1e-9, py::arg("fixed_point_max") = 100,
+           py::arg("reference") = py::none())
       .def("set_tresca_bounds", [](CS& S, DArr s) { require_shape(s, "bounds", {(py::ssize_t)S.num_contact()}); S.set_tresca_bounds(s.data()); })
       .def("set_coefficients", [](CS& S, DArr s) { require_shape(s, "coefficients", {(py::ssize_t)S.num_contact()}); S.set_coefficients(s.data()); })
       .def_property_readonly("num_levels", [](const CS& S) { return S.coarse().num_coarse_levels() + 1; })
