@@ -1,0 +1,36 @@
+"""Runs every benchmark (tens of minutes on 2 cores); each prints its table and writes JSON/PNG.
+
+    python benchmarks/run_all.py [--out out] [--quick]
+"""
+import argparse
+import os
+import subprocess
+import sys
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--out", default="out")
+    ap.add_argument("--quick", action="store_true", help="smaller levels (a few minutes)")
+    a = ap.parse_args()
+    os.makedirs(a.out, exist_ok=True)
+    top = 7 if a.quick else 9
+    jobs = [
+        ["linear_levels.py", "--levels", "3", str(top), "--json", os.path.join(a.out, "linear_levels.json")],
+        ["scaling.py", "--cell", "triangle", "--levels", "3", str(top), "--out", a.out],
+        ["scaling.py", "--cell", "quad", "--levels", "3", str(top - 1), "--out", a.out],
+        ["work_precision.py", "--levels", "5", "6", "7"] + ([] if a.quick else ["8"]) + ["--out", a.out],
+        ["discretization_error.py", "--levels", "3", str(top - 2), "--reference", str(top), "--out", a.out],
+    ]
+    for job in jobs:
+        print(f"== {' '.join(job)}", flush=True)
+        subprocess.run([sys.executable, os.path.join(HERE, job[0])] + job[1:], check=True)
+    print("== table1", flush=True)
+    subprocess.run([sys.executable, "-m", "contactmg", "table1", "--json", os.path.join(a.out, "table1.json"),
+                    "--plot", os.path.join(a.out, "table1.png"), "-q"], check=True)
+
+
+if __name__ == "__main__":
+    main()
