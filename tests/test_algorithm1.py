@@ -3,6 +3,7 @@ import numpy as np
 import pytest
 
 from contactmg import hertz
+from contactmg.checks import contact_conditions
 
 
 def energy_norm(p, u):
@@ -19,6 +20,8 @@ def test_fixed_point_reaches_the_nmg_solution(cell, F):
     assert fp.outer_iterations >= 2
     rel = energy_norm(p, fp.displacement - nm.displacement) / energy_norm(p, nm.displacement)
     assert rel <= 1e-8, rel
+    # and both are solutions by an independent check of the contact conditions
+    assert contact_conditions(p, nm)["max"] < 1e-9 and contact_conditions(p, fp)["max"] < 1e-7
     np.testing.assert_array_equal(fp.contact_state, nm.contact_state)
 
 
@@ -53,15 +56,29 @@ def test_fixed_point_costs_several_times_more_cycles_at_f_0_4():
 
 def test_fixed_point_slows_down_for_f_5_on_finer_levels():
     """The paper's Algorithm 1 fails for F = 5 on its finer, contact-refined levels; on the uniform
-    levels the suite affords it converges but needs many more outer iterations as h shrinks (here
-    3 at level 3, about 55 at level 7), while Algorithm 2 keeps its cycle count."""
+    levels the suite affords (up to 7) it converges but needs more outer iterations on the finest
+    one: 3 on levels 2-6, 55 on level 7 (where it converges slowly to a state with two sliding nodes
+    at the edge of the contact zone); measured: 7 on level 8, not part of the suite."""
     out = {}
     for L in (3, 7):
         p = hertz.hertz_problem("triangle", L, 5.0)
         fp = p.solve("fixed-point")
         out[L] = fp.outer_iterations if fp.converged else np.inf
+        if fp.converged:
+            assert contact_conditions(p, fp)["max"] < 1e-6
     print("F = 5 outer iterations", out)
-    assert out[7] >= 5 * out[3], out
+    assert out[7] > out[3], out
+
+
+@pytest.mark.xfail(strict=True, reason="known core bug: at level 7, F >= 5 the nmg iterate alternates between two "
+                   "contact states sweep by sweep; with nu1 + nu2 = 6 the cycle maps it onto itself and the "
+                   "correction-norm test stops on a non-solution")
+def test_nmg_result_satisfies_the_conditions_for_f_5_on_level_7():
+    p = hertz.hertz_problem("triangle", 7, 5.0)
+    nm = p.solve("nmg")
+    assert nm.converged
+    v = contact_conditions(p, nm)
+    assert v["max"] < 1e-8, v  # measured: interior residual 0.30, force at lifted nodes 0.47 (relative)
 
 
 def test_fixed_point_reports_non_convergence():

@@ -1,9 +1,25 @@
-"""Plots in the paper's style. Every helper takes ax=None (a new figure then) and returns the axes."""
+"""Plots in the paper's style (matplotlib). Every helper takes ax=None (a new figure then) and
+returns the axes it drew on.
+
+- plot_boundary_stress: Figure 2 (middle), boundary stresses with stick and slip zones;
+- plot_convergence: Figure 1 (left), total V-cycles against the number of nodes;
+- plot_fixed_point_iterations: Figure 1 (right), Algorithm 1's outer iterations per level and F;
+- plot_table1: Table 1 as a table image;
+- plot_correction_history: ||u^{k+1} - u^k||_A against the cycle for several solves.
+"""
 from __future__ import annotations
+
+from typing import Dict, Iterable, List, Optional, Sequence
 
 import numpy as np
 
+from .checks import VIOLATION_TOL
 from .results import SLIP, STICK
+
+STICK_COLOR, SLIP_COLOR = "tab:green", "tab:orange"
+ALG1_COLOR, ALG2_COLOR = "tab:blue", "tab:red"
+_MARKERS = "os^vD<>ph*"
+_LINESTYLES = ["-", "--", "-.", ":"]
 
 
 def _axes(ax, **kw):
@@ -15,8 +31,9 @@ def _axes(ax, **kw):
 
 
 def _zones(x, mask):
-    """Contiguous runs of True in mask (x sorted) as (x_start, x_end) spans reaching half-way to
-    the neighbouring nodes."""
+    """Contiguous runs of True in mask (x sorted) as (x_start, x_end) spans that reach half-way to
+    the neighbouring nodes (to the node itself at either end): every node of the run lies inside its
+    span and every node outside the run lies outside it."""
     spans = []
     i, n = 0, len(x)
     while i < n:
@@ -28,50 +45,91 @@ def _zones(x, mask):
             j += 1
         lo = x[i] if i == 0 else 0.5 * (x[i - 1] + x[i])
         hi = x[j] if j == n - 1 else 0.5 * (x[j] + x[j + 1])
-        spans.append((lo, hi))
+        spans.append((float(lo), float(hi)))
         i = j + 1
     return spans
 
 
-def plot_boundary_stress(result, ax=None, friction=None, margin: float = 1.5):
-    """Figure 2 (middle) of the paper: normal (blue) and tangential (red) boundary stress along x,
-    the Coulomb bound +-F|sigma_n| dashed, stick and slip zones shaded. Shows the contact nodes with
-    |x| up to `margin` times the contact half-width."""
-    ax = _axes(ax, figsize=(7, 4))
+def result_friction(result) -> Optional[float]:
+    """The Coulomb coefficient a result was computed with, read off its friction bound
+    (F |s_n| at the nodes in contact), or None when the law is not Coulomb or nothing is pressed."""
+    if getattr(result, "law", None) != "coulomb":
+        return None
+    sn = np.abs(result.contact_force[:, 0])
+    sel = (result.contact_state > 0) & (sn > 1e-12 * max(sn.max(initial=0.0), 1e-300))
+    if not np.any(sel):
+        return None
+    return float(np.median(result.friction_bound[sel] / sn[sel]))
+
+
+def boundary_stress_data(result, margin: float = 1.5) -> Dict[str, np.ndarray]:
+    """The data plot_boundary_stress draws: contact nodes with |x| <= margin * contact half-width
+    (all contact nodes when nothing is in contact), sorted by x, with their normal and tangential
+    stress and contact state."""
     x = result.mesh.points[result.contact_nodes, 0]
-    width = max(result.contact_halfwidth, 1e-12)
-    sel = np.abs(x) <= margin * width
-    order = np.argsort(x[sel])
-    xs = x[sel][order]
-    sn = result.normal_stress[sel][order]
-    st = result.tangential_stress[sel][order, 0]
-    state = result.contact_state[sel][order]
-    for lo, hi in _zones(xs, state == STICK):
-        ax.axvspan(lo, hi, color="tab:green", alpha=0.15, lw=0, label="stick" if lo == _zones(xs, state == STICK)[0][0] else None)
+    width = result.contact_halfwidth
+    sel = np.abs(x) <= margin * width if width > 0 else np.ones(len(x), bool)
+    idx = np.flatnonzero(sel)
+    idx = idx[np.argsort(x[idx], kind="stable")]
+    return {"index": idx, "x": x[idx], "normal": result.normal_stress[idx],
+            "tangential": result.tangential_stress[idx, 0], "state": result.contact_state[idx],
+            "bound": result.friction_bound[idx] / result.measure[idx]}
+
+
+def plot_boundary_stress(result, ax=None, friction: Optional[float] = None, margin: float = 1.5):
+    """Figure 2 (middle) of the paper: normal (blue) and tangential (red) boundary stress along x at
+    the contact nodes with |x| up to `margin` times the contact half-width, the Coulomb bound
+    +-F|sigma_n| dashed (F = `friction`, else the coefficient read off the result; for Tresca the
+    given bound), stick zones (green) and slip zones (orange) shaded. A shaded span reaches half-way
+    to the neighbouring nodes on either side."""
+    ax = _axes(ax, figsize=(7, 4))
+    data = boundary_stress_data(result, margin)
+    xs, sn, st, state = data["x"], data["normal"], data["tangential"], data["state"]
+    for k, (lo, hi) in enumerate(_zones(xs, state == STICK)):
+        ax.axvspan(lo, hi, color=STICK_COLOR, alpha=0.18, lw=0, label="stick" if k == 0 else None)
     for k, (lo, hi) in enumerate(_zones(xs, state == SLIP)):
-        ax.axvspan(lo, hi, color="tab:orange", alpha=0.15, lw=0, label="slip" if k == 0 else None)
-    ax.plot(xs, sn, "-", color="tab:blue", marker=".", label=r"normal stress $\sigma_n$")
-    ax.plot(xs, st, "-", color="tab:red", marker=".", label=r"tangential stress $\sigma_T$")
-    if friction:
+        ax.axvspan(lo, hi, color=SLIP_COLOR, alpha=0.18, lw=0, label="slip" if k == 0 else None)
+    ax.plot(xs, sn, "-", color="tab:blue", marker=".", ms=4, label="normal stress")
+    ax.plot(xs, st, "-", color="tab:red", marker=".", ms=4, label="tangential stress")
+    if friction is None:
+        friction = result_friction(result)
+    bound = None
+    if friction is not None and friction > 0:
         bound = friction * np.abs(sn)
-        ax.plot(xs, bound, "--", color="0.4", lw=1, label=r"$\pm F|\sigma_n|$")
-        ax.plot(xs, -bound, "--", color="0.4", lw=1)
+        name = r"$\pm F|\sigma_n|$"
+    elif getattr(result, "law", None) == "tresca":
+        bound, name = data["bound"], "Tresca bound"
+    if bound is not None:
+        ax.plot(xs, bound, "--", color="0.35", lw=1, label=name)
+        ax.plot(xs, -bound, "--", color="0.35", lw=1)
     ax.axhline(0, color="k", lw=0.5)
     ax.set_xlabel("x")
     ax.set_ylabel("boundary stress")
-    ax.set_title(f"{result.method}, {result.law}" + (f", F = {friction:g}" if friction else ""))
+    ax.set_title(f"{result.method}, {result.law}" + (f", F = {friction:g}" if friction is not None else ""))
     ax.legend(loc="best", fontsize=8)
     return ax
 
 
-def plot_correction_history(results, ax=None, labels=None):
-    """Correction norm ||u^{k+1} - u^k||_A against cycle (log scale) for one or more results."""
+def _method_name(method: str) -> str:
+    return {"fixed-point": "Algorithm 1 (fixed point)", "nmg": "Algorithm 2 (nmg)"}.get(method, method)
+
+
+def plot_correction_history(results, ax=None, labels: Optional[Sequence[str]] = None):
+    """Correction norm ||u^{k+1} - u^k||_A against the cycle (log y) for one or more results. The
+    legend names the method and the friction coefficient (read off each result) unless `labels`
+    are given. For Algorithm 1 the cycles run on across its outer iterations."""
     ax = _axes(ax, figsize=(6, 4))
     if not isinstance(results, (list, tuple)):
         results = [results]
     for k, r in enumerate(results):
-        label = labels[k] if labels else f"{r.method} ({r.law})"
-        ax.semilogy(r.history["cycle"], r.history["correction_norm"], marker=".", label=label)
+        if labels is not None:
+            label = labels[k]
+        else:
+            F = result_friction(r)
+            label = _method_name(r.method) + (f", F={F:g}" if F is not None else f" ({r.law})")
+            if r.outer_iterations is not None:
+                label += f", {r.outer_iterations} outer"
+        ax.semilogy(r.history["cycle"], r.history["correction_norm"], marker=".", ms=3, lw=1, label=label)
     ax.set_xlabel("cycle")
     ax.set_ylabel(r"$\|u^{k+1}-u^k\|_A$")
     ax.grid(True, which="both", alpha=0.3)
@@ -79,64 +137,149 @@ def plot_correction_history(results, ax=None, labels=None):
     return ax
 
 
-def plot_table1(table, ax=None):
-    """Table 1 as an image: fixed-point iterations per friction coefficient (rows) and dofs
-    (columns), "no conv." where Algorithm 1 failed."""
-    ax = _axes(ax, figsize=(8, 4))
-    cells = [[("no conv." if v is None else str(v)) for v in row] for row in table["fixed_point_iterations"]]
+def _fmt_iterations(v) -> str:
+    return "no conv." if v is None else str(v)
+
+
+def _nmg_ok(table: Dict, i: int, j: int) -> bool:
+    """Algorithm 2 converged in run [i][j] (and, where the table has the check, to a solution)."""
+    ok = bool(table["nmg_converged"][i][j]) if "nmg_converged" in table else True
+    if "nmg_violation" in table:
+        ok = ok and table["nmg_violation"][i][j] <= VIOLATION_TOL
+    return ok
+
+
+def plot_table1(table: Dict, ax=None, vcycles: bool = False):
+    """Table 1 as an image: rows F, columns the number of dofs, entries Algorithm 1's outer
+    iterations, "no conv." where it did not converge. With vcycles=True an entry also shows the
+    V-cycles of both algorithms, "its (Alg. 1 / Alg. 2)", with a "!" after Algorithm 2's count where
+    it did not converge or stopped on a non-solution."""
+    ax = _axes(ax, figsize=(1.6 + 1.2 * len(table["dofs"]) * (2 if vcycles else 1), 0.8 + 0.3 * len(table["frictions"])))
+    cells = []
+    for i, row in enumerate(table["fixed_point_iterations"]):
+        line = []
+        for j, v in enumerate(row):
+            s = _fmt_iterations(v)
+            if vcycles:
+                s += f" ({table['fixed_point_vcycles'][i][j]}/{table['nmg_vcycles'][i][j]}{'' if _nmg_ok(table, i, j) else '!'})"
+            line.append(s)
+        cells.append(line)
     t = ax.table(cellText=cells, rowLabels=[f"{F:g}" for F in table["frictions"]],
                  colLabels=[f"{d:,}" for d in table["dofs"]], loc="center", cellLoc="center")
     t.auto_set_font_size(False)
     t.set_fontsize(8)
     t.scale(1, 1.3)
+    for (r, c), cell in t.get_celld().items():
+        if r > 0 and c >= 0 and ("no conv." in cell.get_text().get_text() or "!" in cell.get_text().get_text()):
+            cell.get_text().set_color("tab:red")
     ax.axis("off")
-    ax.set_title("Table 1: fixed-point iterations (F \\ dofs)")
+    ax.set_title("Table 1: fixed-point iterations (rows F, columns dofs)" +
+                 (" (V-cycles Alg. 1 / Alg. 2)" if vcycles else ""), fontsize=9)
     return ax
 
 
-def plot_convergence(table, ax=None, frictions=None):
-    """Figure 1 left: total V-cycles against the number of nodes (log axis), Algorithm 1 (fixed
-    point) blue and Algorithm 2 (nmg) red, one curve per friction coefficient."""
+def convergence_records(table: Dict) -> List[Dict]:
+    """Flat records {friction, nodes, method, cycles, converged} from a table1() dict (an nmg run
+    that stopped on a non-solution, per its nmg_violation, counts as not converged)."""
+    out = []
+    for i, F in enumerate(table["frictions"]):
+        for j, n in enumerate(table["nodes"]):
+            it = table["fixed_point_iterations"][i][j]
+            out.append({"friction": F, "nodes": n, "method": "fixed-point", "cycles": table["fixed_point_vcycles"][i][j],
+                        "converged": it is not None})
+            out.append({"friction": F, "nodes": n, "method": "nmg", "cycles": table["nmg_vcycles"][i][j],
+                        "converged": _nmg_ok(table, i, j)})
+    return out
+
+
+def plot_convergence(records, ax=None, frictions: Optional[Iterable[float]] = None):
+    """Figure 1 left: total V-cycles against the number of nodes (log x axis), Algorithm 1 (fixed
+    point) blue, Algorithm 2 (nmg) red, one curve per friction coefficient (its own marker and line
+    style, labelled "Alg. 1, F=..." / "Alg. 2, F=...").
+
+    `records`: a table1() dict, or a list of per-solve records with the keys friction, nodes,
+    method ("fixed-point" or "nmg"), cycles and optionally converged (e.g. the JSON reports of
+    `contactmg hertz`). Runs that did not converge are ringed in black (label "no conv.")."""
     ax = _axes(ax, figsize=(6, 4.5))
-    nodes = np.asarray(table["nodes"])
-    frictions = table["frictions"] if frictions is None else frictions
-    markers = "os^vD<>ph*"
-    for k, F in enumerate(table["frictions"]):
-        if F not in frictions:
+    if isinstance(records, dict):
+        records = convergence_records(records)
+    records = list(records)
+    allF = sorted({float(r["friction"]) for r in records})
+    keep = allF if frictions is None else [float(F) for F in frictions]
+    failed = []
+    for k, F in enumerate(allF):
+        if F not in keep:
             continue
-        m = markers[k % len(markers)]
-        ax.semilogx(nodes, table["fixed_point_vcycles"][k], "-", color="tab:blue", marker=m, ms=4, lw=1,
-                    label=f"Alg. 1, F={F:g}")
-        ax.semilogx(nodes, table["nmg_vcycles"][k], "-", color="tab:red", marker=m, ms=4, lw=1, label=f"Alg. 2, F={F:g}")
+        for method, color, name in (("fixed-point", ALG1_COLOR, "Alg. 1"), ("nmg", ALG2_COLOR, "Alg. 2")):
+            rs = sorted((r for r in records if float(r["friction"]) == F and r["method"] == method), key=lambda r: r["nodes"])
+            if not rs:
+                continue
+            x = [r["nodes"] for r in rs]
+            y = [r["cycles"] for r in rs]
+            ax.plot(x, y, color=color, marker=_MARKERS[k % len(_MARKERS)], ls=_LINESTYLES[k % len(_LINESTYLES)],
+                    ms=4, lw=1, label=f"{name}, F={F:g}")
+            failed += [(r["nodes"], r["cycles"]) for r in rs if not r.get("converged", True)]
+    if failed:
+        fx, fy = zip(*failed)
+        ax.scatter(fx, fy, s=70, facecolors="none", edgecolors="k", lw=1.2, zorder=5, label="no conv.")
+    ax.set_xscale("log")
     ax.set_xlabel("number of nodes")
     ax.set_ylabel("number of V-cycles")
-    ax.set_title("Figure 1 (left): Algorithm 1 blue, Algorithm 2 red")
+    ax.set_title("Figure 1 (left): Algorithm 1 blue, Algorithm 2 red", fontsize=9)
     ax.legend(fontsize=6, ncol=2)
     return ax
 
 
-def plot_fixed_point_iterations(table, ax=None):
-    """Figure 1 right: fixed-point iterations against level and friction coefficient (3D bars;
-    "no conv." drawn as a red bar at the iteration limit)."""
-    if ax is None:
+def plot_fixed_point_iterations(table: Dict, ax=None, kind: str = "bar3d", annotate: bool = True):
+    """Figure 1 right: Algorithm 1's outer iterations against level and friction coefficient.
+    kind="bar3d" (like the paper; needs a 3D axes, created when ax is None) draws one bar per
+    (level, F), a red bar up to the top of the plot where it did not converge; kind="heatmap" draws
+    the iterations as an image (not converged: masked, hatched). With annotate the numbers (or
+    "no conv.") are written on the bars/cells."""
+    levels = list(table["levels"])
+    F = list(table["frictions"])
+    its = table["fixed_point_iterations"]
+    data = np.array([[np.nan if v is None else v for v in row] for row in its], dtype=float)
+    top = float(np.nanmax(data)) if np.any(np.isfinite(data)) else 1.0
+    if kind == "bar3d":
+        if ax is None:
+            import matplotlib.pyplot as plt
+
+            ax = plt.figure(figsize=(6, 5)).add_subplot(projection="3d")
+        for i in range(len(F)):
+            for j in range(len(levels)):
+                v = data[i, j]
+                h = top * 1.1 if np.isnan(v) else v
+                ax.bar3d(j, i, 0, 0.6, 0.6, h, color="tab:red" if np.isnan(v) else "tab:blue", alpha=0.8, shade=True)
+                if annotate:
+                    ax.text(j + 0.3, i + 0.3, h * 1.02, "no conv." if np.isnan(v) else f"{int(v)}", fontsize=6,
+                            ha="center", color="tab:red" if np.isnan(v) else "k")
+        ax.set_xticks(np.arange(len(levels)) + 0.3)
+        ax.set_xticklabels([str(L) for L in levels])
+        ax.set_yticks(np.arange(len(F)) + 0.3)
+        ax.set_yticklabels([f"{f:g}" for f in F], fontsize=7)
+        ax.set_zlabel("iterations")
+    elif kind == "heatmap":
+        ax = _axes(ax, figsize=(1.5 + 0.8 * len(levels), 1 + 0.4 * len(F)))
         import matplotlib.pyplot as plt
 
-        ax = plt.figure(figsize=(6, 5)).add_subplot(projection="3d")
-    levels = table["levels"]
-    F = table["frictions"]
-    its = table["fixed_point_iterations"]
-    top = max([v for row in its for v in row if v is not None] + [1])
-    for i in range(len(F)):
-        for j in range(len(levels)):
-            v = its[i][j]
-            ax.bar3d(j, i, 0, 0.6, 0.6, top * 1.1 if v is None else v, color="tab:red" if v is None else "tab:blue",
-                     alpha=0.8, shade=True)
-    ax.set_xticks(np.arange(len(levels)) + 0.3)
-    ax.set_xticklabels([str(L) for L in levels])
-    ax.set_yticks(np.arange(len(F)) + 0.3)
-    ax.set_yticklabels([f"{f:g}" for f in F], fontsize=7)
+        cmap = plt.get_cmap("Blues").with_extremes(bad="mistyrose")
+        ax.imshow(np.ma.masked_invalid(data), cmap=cmap, aspect="auto", origin="lower", vmin=0, vmax=top)
+        for i in range(len(F)):
+            for j in range(len(levels)):
+                v = data[i, j]
+                if np.isnan(v):
+                    ax.add_patch(plt.Rectangle((j - 0.5, i - 0.5), 1, 1, fill=False, hatch="//", ec="tab:red", lw=0))
+                if annotate:
+                    ax.text(j, i, "no conv." if np.isnan(v) else f"{int(v)}", ha="center", va="center", fontsize=7,
+                            color="tab:red" if np.isnan(v) else ("w" if v > 0.6 * top else "k"))
+        ax.set_xticks(np.arange(len(levels)))
+        ax.set_xticklabels([str(L) for L in levels])
+        ax.set_yticks(np.arange(len(F)))
+        ax.set_yticklabels([f"{f:g}" for f in F], fontsize=7)
+    else:
+        raise ValueError(f"kind must be 'bar3d' or 'heatmap', got {kind!r}")
     ax.set_xlabel("level")
     ax.set_ylabel("F")
-    ax.set_zlabel("iterations")
-    ax.set_title("Figure 1 (right): fixed-point iterations (red: no conv.)")
+    ax.set_title("Figure 1 (right): fixed-point iterations (red: no conv.)", fontsize=9)
     return ax

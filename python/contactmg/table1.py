@@ -1,5 +1,22 @@
 """Table 1 and Figure 1 of the paper: Algorithm 1 (fixed point) and Algorithm 2 (nmg) on the Hertz
-benchmark over levels and friction coefficients."""
+benchmark over levels and friction coefficients.
+
+`table1(levels, frictions)` returns a dict (the JSON of `contactmg table1`, DESIGN section 9) whose
+per-run lists are indexed [friction][level]:
+
+    levels, frictions, cell, tol, nodes, dofs                      (nodes/dofs: one per level)
+    fixed_point_iterations   outer iterations of Algorithm 1, None where it did not converge
+    fixed_point_vcycles      its total V-cycles (counted also where it did not converge)
+    fixed_point_status       the solver's status text
+    fixed_point_seconds      solve time
+    fixed_point_violation    relative violation of the discrete contact conditions (checks.py)
+    nmg_vcycles, nmg_converged, nmg_status, nmg_seconds, nmg_violation   the same for Algorithm 2
+    seconds                  wall time of the whole table (setup included)
+
+The violation columns are computed from the returned displacement alone (residual A u - f and the
+Coulomb conditions, relative to the largest contact force): a solve can meet its stopping test
+||u^{k+1} - u^k||_A <= tol on an iterate the cycle merely maps back onto itself.
+"""
 from __future__ import annotations
 
 import json
@@ -7,57 +24,85 @@ import sys
 import time
 from typing import Dict, Sequence
 
+from .checks import VIOLATION_TOL, contact_conditions
 from .hertz import PAPER_FRICTIONS, hertz_problem
 
-DEFAULT_LEVELS = (2, 3, 4, 5, 6, 7)
+# Measured on 2 cores (triangles, the ten coefficients of the paper): levels 2-7 take about 40 s,
+# levels 2-8 (up to 592,130 dofs, the size of the paper's finest level) 3 minutes (level 9: 23 more).
+DEFAULT_LEVELS = (2, 3, 4, 5, 6, 7, 8)
+# A "converged" nmg run whose displacement violates the contact conditions by more than
+# VIOLATION_TOL (relative, checks.py) is not a solution: run_table1 then exits with status 3.
+
+_PER_RUN = ("fixed_point_iterations", "fixed_point_vcycles", "fixed_point_status", "fixed_point_seconds",
+            "fixed_point_violation", "nmg_vcycles", "nmg_converged", "nmg_status", "nmg_seconds", "nmg_violation")
 
 
 def table1(levels: Sequence[int] = DEFAULT_LEVELS, frictions: Sequence[float] = PAPER_FRICTIONS,
-           cell: str = "triangle", progress: bool = True, tol: float = 1e-11) -> Dict:
-    """Runs both algorithms for every (friction, level). Lists are indexed [friction][level].
-    fixed_point_iterations is None where Algorithm 1 did not converge (its V-cycles still count)."""
+           cell: str = "triangle", progress: bool = True, tol: float = 1e-11, fixed_point_tol: float = 1e-9,
+           fixed_point_max: int = 100, max_cycles: int = 200) -> Dict:
+    """Runs Algorithm 1 ("fixed-point") and Algorithm 2 ("nmg") for every (friction, level) of the
+    Hertz benchmark from u = 0 (tqdm progress bar on standard error unless progress=False).
+    Returns the dict described in the module docstring."""
     from tqdm import tqdm
 
-    levels, frictions = list(levels), list(frictions)
+    t0 = time.perf_counter()
+    levels, frictions = [int(L) for L in levels], [float(F) for F in frictions]
     out = {"problem": "hertz", "cell": cell, "levels": levels, "frictions": frictions, "tol": tol,
-           "nodes": [], "dofs": [], "fixed_point_iterations": [], "fixed_point_vcycles": [], "fixed_point_status": [],
-           "fixed_point_seconds": [], "nmg_vcycles": [], "nmg_converged": [], "nmg_seconds": []}
+           "fixed_point_tol": fixed_point_tol, "fixed_point_max": fixed_point_max, "nodes": [], "dofs": []}
+    rows = {k: [[None] * len(levels) for _ in frictions] for k in _PER_RUN}
     bar = tqdm(total=len(levels) * len(frictions), disable=not progress, desc="table1", unit="run", file=sys.stderr)
-    rows = {k: [[None] * len(levels) for _ in frictions] for k in
-            ("fixed_point_iterations", "fixed_point_vcycles", "fixed_point_status", "fixed_point_seconds",
-             "nmg_vcycles", "nmg_converged", "nmg_seconds")}
-    for j, L in enumerate(levels):
-        for i, F in enumerate(frictions):
-            p = hertz_problem(cell, L, F, coulomb_at_zero=True)
-            if i == 0:
-                out["nodes"].append(int(p.mesh.num_points))
-                out["dofs"].append(int(p.mesh.num_points * p.mesh.dim))
-            fp = p.solve("fixed-point", tol=tol)
-            nm = p.solve("nmg", tol=tol)
-            rows["fixed_point_iterations"][i][j] = fp.outer_iterations if fp.converged else None
-            rows["fixed_point_vcycles"][i][j] = fp.cycles
-            rows["fixed_point_status"][i][j] = fp.status
-            rows["fixed_point_seconds"][i][j] = fp.solve_seconds
-            rows["nmg_vcycles"][i][j] = nm.cycles
-            rows["nmg_converged"][i][j] = nm.converged
-            rows["nmg_seconds"][i][j] = nm.solve_seconds
-            bar.set_postfix(level=L, F=F)
-            bar.update()
-    bar.close()
+    try:
+        for j, L in enumerate(levels):
+            for i, F in enumerate(frictions):
+                bar.set_postfix(level=L, F=F)
+                p = hertz_problem(cell, L, F, coulomb_at_zero=True)
+                if i == 0:
+                    out["nodes"].append(int(p.mesh.num_points))
+                    out["dofs"].append(int(p.mesh.num_points * p.mesh.dim))
+                fp = p.solve("fixed-point", tol=tol, max_cycles=max_cycles, fixed_point_tol=fixed_point_tol,
+                             fixed_point_max=fixed_point_max)
+                nm = p.solve("nmg", tol=tol, max_cycles=max_cycles)
+                rows["fixed_point_iterations"][i][j] = fp.outer_iterations if fp.converged else None
+                rows["fixed_point_vcycles"][i][j] = fp.cycles
+                rows["fixed_point_status"][i][j] = fp.status
+                rows["fixed_point_seconds"][i][j] = fp.solve_seconds
+                rows["fixed_point_violation"][i][j] = contact_conditions(p, fp)["max"]
+                rows["nmg_vcycles"][i][j] = nm.cycles
+                rows["nmg_converged"][i][j] = nm.converged
+                rows["nmg_status"][i][j] = nm.status
+                rows["nmg_seconds"][i][j] = nm.solve_seconds
+                rows["nmg_violation"][i][j] = contact_conditions(p, nm)["max"]
+                bar.update()
+    finally:
+        bar.close()
     out.update(rows)
+    out["seconds"] = time.perf_counter() - t0
     return out
 
 
-def save_figures(table: Dict, path: str) -> None:
-    """One PNG with Table 1, Figure 1 left and Figure 1 right."""
-    import matplotlib
+def merge_levels(a: Dict, b: Dict) -> Dict:
+    """The table of a's levels followed by b's (same frictions and cell), e.g. to grow a table one
+    level at a time."""
+    if a["frictions"] != b["frictions"] or a["cell"] != b["cell"]:
+        raise ValueError("tables with different frictions or cells cannot be merged")
+    out = dict(a)
+    for k in ("levels", "nodes", "dofs"):
+        out[k] = list(a[k]) + list(b[k])
+    for k in _PER_RUN:
+        out[k] = [list(ra) + list(rb) for ra, rb in zip(a[k], b[k])]
+    out["seconds"] = a.get("seconds", 0.0) + b.get("seconds", 0.0)
+    return out
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+
+def save_figures(table: Dict, path: str, dpi: int = 130) -> None:
+    """One image at `path` with three panels: Table 1 (left), Figure 1 left (V-cycles against nodes,
+    middle) and Figure 1 right (fixed-point iterations as 3D bars, right). Uses matplotlib's Figure
+    directly, so it neither needs nor changes a pyplot backend."""
+    from matplotlib.figure import Figure
 
     from .plots import plot_convergence, plot_fixed_point_iterations, plot_table1
 
-    fig = plt.figure(figsize=(16, 5.5))
+    fig = Figure(figsize=(18, 6))
     ax0 = fig.add_subplot(1, 3, 1)
     ax1 = fig.add_subplot(1, 3, 2)
     ax2 = fig.add_subplot(1, 3, 3, projection="3d")
@@ -65,41 +110,67 @@ def save_figures(table: Dict, path: str) -> None:
     plot_convergence(table, ax=ax1)
     plot_fixed_point_iterations(table, ax=ax2)
     fig.tight_layout()
-    fig.savefig(path, dpi=130)
-    plt.close(fig)
+    fig.savefig(path, dpi=dpi)
+
+
+def failed_runs(table: Dict, violation_tol: float = VIOLATION_TOL):
+    """(F, level, why) of every nmg run that did not converge or whose result is not a solution."""
+    bad = []
+    for i, F in enumerate(table["frictions"]):
+        for j, L in enumerate(table["levels"]):
+            if not table["nmg_converged"][i][j]:
+                bad.append((F, L, table["nmg_status"][i][j]))
+            elif table["nmg_violation"][i][j] > violation_tol:
+                bad.append((F, L, f"stopped as converged, but violates the contact conditions by "
+                                  f"{table['nmg_violation'][i][j]:.1e} (relative)"))
+    return bad
 
 
 def run_table1(args) -> int:
-    t0 = time.perf_counter()
+    """`contactmg table1`: runs table1() over args.levels (default DEFAULT_LEVELS) and
+    args.frictions (default the paper's ten coefficients) for args.cell; writes the JSON to
+    args.json ("-": standard output) and, with args.plot, one PNG at that path with three panels
+    (Table 1, Figure 1 left, Figure 1 right). Prints the table as text unless args.quiet (to standard
+    error when the JSON goes to standard output). Exit status 0, or 3 when some nmg run did not
+    converge or stopped on an iterate that is not a solution (relative violation of the contact
+    conditions > VIOLATION_TOL); the JSON and the figure are written in either case."""
     kw = {}
     if args.levels:
         kw["levels"] = args.levels
     if args.frictions:
         kw["frictions"] = args.frictions
     table = table1(cell=args.cell, progress=not args.quiet, **kw)
-    table["seconds"] = time.perf_counter() - t0
     if args.json == "-":
         sys.stdout.write(json.dumps(table, indent=1) + "\n")
+        sys.stdout.flush()
     elif args.json:
         with open(args.json, "w") as fh:
             json.dump(table, fh, indent=1)
+            fh.write("\n")
     if args.plot:
         save_figures(table, args.plot)
+    bad = failed_runs(table)
+    stream = sys.stderr if args.json == "-" else sys.stdout
     if not args.quiet:
-        stream = sys.stderr if args.json == "-" else sys.stdout
         print(format_table(table), file=stream)
-    return 0 if all(all(r) for r in table["nmg_converged"]) else 3
+    for F, L, why in bad:
+        print(f"contactmg table1: nmg at F = {F:g}, level {L}: {why}", file=sys.stderr)
+    return 3 if bad else 0
 
 
 def format_table(table: Dict) -> str:
-    """Text form: outer iterations of Algorithm 1 (V-cycles of Algorithm 1 / of Algorithm 2)."""
-    head = "F \\ dofs " + "".join(f"{d:>18,}" for d in table["dofs"])
+    """Text form: outer iterations of Algorithm 1 (V-cycles of Algorithm 1 / of Algorithm 2);
+    a "!" marks an nmg run that did not converge or whose result violates the contact conditions."""
+    bad = {(F, L) for F, L, _ in failed_runs(table)}
+    head = "F \\ dofs " + "".join(f"{d:>20,}" for d in table["dofs"])
     lines = [head]
     for i, F in enumerate(table["frictions"]):
         cells = []
-        for j in range(len(table["levels"])):
+        for j, L in enumerate(table["levels"]):
             it = table["fixed_point_iterations"][i][j]
-            nm = table["nmg_vcycles"][i][j] if table["nmg_converged"][i][j] else "no conv."
-            cells.append(f"{(it if it is not None else 'no conv.')!s:>8} ({table['fixed_point_vcycles'][i][j]}/{nm})")
-        lines.append(f"{F:<9g}" + "".join(f"{c:>18}" for c in cells))
+            mark = "!" if (F, L) in bad else ""
+            cells.append(f"{(it if it is not None else 'no conv.')!s:>8} ({table['fixed_point_vcycles'][i][j]}/"
+                         f"{table['nmg_vcycles'][i][j]}{mark})")
+        lines.append(f"{F:<9g}" + "".join(f"{c:>20}" for c in cells))
+    lines.append(f"levels {table['levels']}, {table['cell']}s; {table.get('seconds', 0):.1f} s")
     return "\n".join(lines)

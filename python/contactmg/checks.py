@@ -1,0 +1,67 @@
+"""Independent check of a computed contact state against the discrete conditions (DESIGN section 2).
+
+The solvers stop when ||u^{k+1} - u^k||_A <= tol. That test cannot tell a solution from an iterate
+that the cycle maps back onto itself without solving anything (e.g. a smoother that flips a few
+contact nodes back and forth with an even number of sweeps per cycle). This module recomputes the
+residual r = A u - f from the displacement alone and measures every condition relative to the largest
+contact force, so a "converged" result can be confirmed or rejected.
+"""
+from __future__ import annotations
+
+from typing import Dict
+
+import numpy as np
+
+from .problem import _frames
+
+# A solve that met its stopping test but violates the conditions by more than this (relative) did
+# not find a solution.
+VIOLATION_TOL = 1e-6
+
+
+def contact_conditions(problem, result) -> Dict[str, float]:
+    """Relative violations of the discrete contact conditions by `result` (a ContactResult of
+    `problem`), each >= 0, plus "max", their maximum:
+
+    - interior: max |(A u - f)| over the free dofs off the contact boundary,
+    - inactive_force: max |(A u - f)_p| over contact nodes off the obstacle (u_n < g),
+    - tension: max (A u - f)_{p,n} over nodes in contact (must be <= 0),
+    - friction_bound: max (|s_T| - s_p) over nodes in contact, s_p = F_p |s_n| (Coulomb), the given
+      bound (Tresca) or 0 (frictionless),
+    - slip_direction: max |s_T + s_p u_T/|u_T|| over sliding nodes,
+    all divided by the largest |s_n|; and penetration: max (u_n - g) / max |u_n| (relative to the
+    displacement). The contact state is recomputed from u (u_n >= g in contact, u_T == 0 sticking),
+    not taken from the result."""
+    c = problem.contact
+    u = np.asarray(result.displacement)
+    r = problem.A.matvec(u) - problem.load
+    Q = _frames(c.normals)
+    ul = np.einsum("cji,cj->ci", Q, u[c.nodes])
+    sl = np.einsum("cji,cj->ci", Q, r[c.nodes])
+    scale = max(float(np.abs(sl[:, 0]).max(initial=0.0)), 1e-300)
+    free = ~problem.fixed.astype(bool)
+    free[c.nodes] = False
+    out = {"interior": float(np.abs(r[free]).max(initial=0.0)) / scale}
+    active = ul[:, 0] >= c.gaps
+    ut = np.linalg.norm(ul[:, 1:], axis=1)
+    st = np.linalg.norm(sl[:, 1:], axis=1)
+    law = problem.law
+    if law == "coulomb":
+        s = problem.coefficients * np.abs(sl[:, 0])
+    elif law == "tresca":
+        s = problem.coefficients
+    else:
+        s = np.zeros(len(c.nodes))
+    out["inactive_force"] = float(np.abs(sl[~active]).max(initial=0.0)) / scale
+    out["tension"] = max(0.0, float(sl[active, 0].max(initial=0.0))) / scale
+    out["friction_bound"] = max(0.0, float((st - s)[active].max(initial=0.0))) / scale
+    slide = active & (ut > 0)
+    if np.any(slide):
+        dev = sl[slide, 1:] + s[slide, None] * ul[slide, 1:] / ut[slide, None]
+        out["slip_direction"] = float(np.linalg.norm(dev, axis=1).max()) / scale
+    else:
+        out["slip_direction"] = 0.0
+    un = max(float(np.abs(ul[:, 0]).max(initial=0.0)), 1e-300)
+    out["penetration"] = max(0.0, float((ul[:, 0] - c.gaps).max(initial=0.0))) / un
+    out["max"] = max(out.values())
+    return out
