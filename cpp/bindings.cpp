@@ -116,6 +116,7 @@ py::dict result_to_dict(const SolveResult& R, Index n, Index nc) {
   out["rebuilds"] = R.rebuilds;
   out["seconds"] = R.seconds;
   out["rebuild_seconds"] = R.rebuild_seconds;
+  out["sweep_check"] = R.sweep_check;
   return out;
 }
 
@@ -227,6 +228,17 @@ void bind_dim(py::module_& m) {
            py::arg("u0") = py::none(), py::arg("tol") = 1e-11, py::arg("rtol") = 0.0, py::arg("max_cycles") = 200,
            py::arg("fixed_point") = false, py::arg("fixed_point_tol") = 1e-9, py::arg("fixed_point_max") = 100,
            py::arg("reference") = py::none())
+      .def("smooth", [](CS& S, DArr u0, int sweeps) {
+             require_shape(u0, "u0", {(py::ssize_t)S.num_nodes(), d});
+             if (sweeps < 0) throw InputError("sweeps must be >= 0");
+             std::vector<double> u;
+             {
+               py::gil_scoped_release release;
+               u = S.smooth(u0.data(), sweeps);
+             }
+             return to_numpy(u, {(py::ssize_t)S.num_nodes(), d});
+           }, py::arg("u0"), py::arg("sweeps") = 1,
+           "Nonlinear Gauss-Seidel sweeps (alternating, forward first) from u0; a solution is a fixed point")
       .def("set_tresca_bounds", [](CS& S, DArr s) { require_shape(s, "bounds", {(py::ssize_t)S.num_contact()}); S.set_tresca_bounds(s.data()); })
       .def("set_coefficients", [](CS& S, DArr s) { require_shape(s, "coefficients", {(py::ssize_t)S.num_contact()}); S.set_coefficients(s.data()); })
       .def_property_readonly("num_levels", [](const CS& S) { return S.coarse().num_coarse_levels() + 1; })

@@ -226,8 +226,10 @@ class CoarseCorrection {
       if (lv_[0].inert[k]) t.emplace_back(k, k, 1.0);
     Eigen::SparseMatrix<double> S(n, n);
     S.setFromTriplets(t.begin(), t.end());
-    if (!analyzed_) { ldlt_.analyzePattern(S); analyzed_ = true; }
-    ldlt_.factorize(S);
+    // The pattern changes with the truncation (inert dofs, entries that cancel to zero): analysing
+    // it once and refactorizing a different pattern wrote out of bounds (tilted obstacles). The
+    // coarsest matrix is small, so it is analysed every time.
+    ldlt_.compute(S);
     if (ldlt_.info() != Eigen::Success)
       throw InputError("the coarsest-level matrix is singular: is rigid-body motion left free by the Dirichlet conditions?");
     const auto D = ldlt_.vectorD();
@@ -272,7 +274,6 @@ class CoarseCorrection {
   std::vector<GalerkinProduct<d>> gp_;
   std::vector<double> scratch_lo_, scratch_hi_;
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt_;
-  bool analyzed_ = false;
   int rebuilds_ = 0, incremental_ = 0;
   double rebuild_seconds_ = 0;
 };

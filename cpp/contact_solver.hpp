@@ -6,6 +6,7 @@
 // Contact nodes work in their frames Q_p = [n, t(, s)]; Dirichlet dofs are eliminated.
 #pragma once
 #include <chrono>
+#include <cstdio>
 #include <cmath>
 #include <functional>
 #include <limits>
@@ -44,7 +45,13 @@ struct SolveResult {
   std::string status;
   int cycles = 0, outer_iterations = 0, rebuilds = 0;
   double seconds = 0, rebuild_seconds = 0;
+  double sweep_check = std::numeric_limits<double>::quiet_NaN();  // ||S(u) - u||_A at the stop
 };
+
+// A stop on the correction norm is confirmed only if one more smoothing sweep moves the iterate by
+// at most this many times the tolerance (a sweep changes a converged iterate by about its error,
+// which is below the last correction; a limit cycle moves it by orders of magnitude more).
+constexpr double kSweepCheckFactor = 100;
 
 // Orthonormal frame with first column n: 2D t = n rotated by +90 degrees; 3D t orthogonal to n
 // built from the canonical axis least aligned with n, s = n x t.
@@ -168,6 +175,29 @@ class ContactSolver {
     }
     finish(R, t0);
     return R;
+  }
+
+  // `sweeps` nonlinear Gauss-Seidel sweeps of the solver's law from u0 (canonical), alternating
+  // direction starting forward; returns the canonical iterate. A solution is a fixed point of this
+  // map (the nodal rules keep every local solution), so it serves as an independent check.
+  std::vector<double> smooth(const double* u0, int sweeps) {
+    start(u0);
+    if (law_ == Law::Tresca) bound_ = coef_;
+    for (int k = 0; k < sweeps; ++k) {
+      const bool fw = k % 2 == 0;
+      switch (law_) {
+        case Law::Linear: sweep<Law::Linear>(fw); break;
+        case Law::Frictionless: sweep<Law::Frictionless>(fw); break;
+        case Law::Tresca: sweep<Law::Tresca>(fw); break;
+        case Law::Coulomb: sweep<Law::Coulomb>(fw); break;
+      }
+    }
+    std::vector<double> u = u_;
+    for (Index c = 0; c < num_contact(); ++c) {
+      VecMap<d> ui(u.data() + contact_node_[c] * d);
+      ui = frames_[c] * Vec<d>(ui);
+    }
+    return u;
   }
 
   // Algorithm 1: u^k solves the Tresca problem with s = F |s_n(u^{k-1})| (warm-started from u^{k-1}).
@@ -432,6 +462,18 @@ class ContactSolver {
         return false;
       }
       if (cn <= opt.tol || cn <= opt.rtol * first) {
+        // The stopping test cannot tell a solution from an iterate that the cycle maps back onto
+        // itself while the smoother keeps moving it (a limit cycle of the nonlinear Gauss-Seidel,
+        // seen for Coulomb at large F). A solution is a fixed point of one sweep: check that.
+        if constexpr (L != Law::Linear) R.sweep_check = sweep_change<L>();
+        const double allowed = kSweepCheckFactor * std::max(opt.tol, opt.rtol * first);
+        if (R.sweep_check > allowed) {
+          R.converged = false;
+          R.status = "stalled: the cycle returns to an iterate (correction " + fmt(cn) +
+                     ") that one more smoothing sweep still moves by " + fmt(R.sweep_check) +
+                     " (energy norm): a limit cycle of the nonlinear smoother, not a solution";
+          return false;
+        }
         R.converged = true;
         R.status = "converged";
         return true;
@@ -439,6 +481,25 @@ class ContactSolver {
     }
     R.converged = false;
     return false;
+  }
+
+  static std::string fmt(double v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.3g", v);
+    return buf;
+  }
+
+  // ||S(u) - u||_A for one forward nonlinear sweep S; u is left as it was.
+  template <Law L>
+  double sweep_change() {
+    old_ = u_;
+    sweep<L>(true);
+    for (std::size_t k = 0; k < u_.size(); ++k) std::swap(u_[k], old_[k]);
+    for (std::size_t k = 0; k < u_.size(); ++k) old_[k] -= u_[k];
+    A_.multiply(old_.data(), tmp_.data());
+    double e = 0;
+    for (std::size_t k = 0; k < u_.size(); ++k) e += old_[k] * tmp_[k];
+    return std::sqrt(std::max(e, 0.0));
   }
 
   void finish(SolveResult& R, clock::time_point t0) {

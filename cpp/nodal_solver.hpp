@@ -70,30 +70,52 @@ Vec<d> solve_node_tresca(const Mat<d>& B, const Vec<d>& b, double g, double s) {
   return x;
 }
 
-// Coulomb inside the smoother: frictionless trial first; if the node stays off the obstacle it
-// carries no friction. Otherwise it sits on the gap and its bound is F |s_n| evaluated at
-// (g, old x_T) — not at the residual before the visit, which after a coarse correction can still be
-// compressive for a node about to lift off and would make it stick sideways while lifting.
-// s_n depends on the node's own x_T through the off-diagonal of its block, so the rule is repeated
-// with the new x_T until it stops changing (at most 100 times): the exact local Coulomb solution
-// where that local map contracts. At F = 8 and 40 this took Hertz level 7 from 24 and 49 cycles to 19.
+// Coulomb on the gap: x_n = g and x_T the Tresca minimizer for the bound F |s_n| of the node's own
+// new position, s_n = (A u - f)_n at (g, x_T). s_n depends on x_T through the off-diagonal of the
+// node's block, so the bound is iterated from x_T = start until it stops changing (at most 100
+// times): the exact local Coulomb solution where that local map contracts. Returns s_n at the result.
 template <int d>
-Vec<d> solve_node_coulomb(const Mat<d>& B, const Vec<d>& b, double g, double F, const Vec<d>& old) {
+double coulomb_on_gap(const Mat<d>& B, const Vec<d>& b, double g, double F, const Vec<d>& start, Vec<d>& x) {
   constexpr int m = d - 1;
-  Vec<d> x = solve_node_tresca<d>(B, b, g, 0.0);
-  if (x[0] < g || F <= 0) return x;
-  const typename Tangential<d>::V BTn = B.template block<m, 1>(1, 0);
-  x[0] = g;
-  typename Tangential<d>::V xt = old.template tail<m>();
+  using T = Tangential<d>;
+  const typename T::V BTn = B.template block<m, 1>(1, 0);
+  const typename T::M BTT = B.template block<m, m>(1, 1);
+  const typename T::V c = b.template tail<m>() - BTn * g;
+  typename T::V xt = start.template tail<m>();
+  double sn = 0;
   for (int it = 0; it < 100; ++it) {
-    const double sn = B(0, 0) * g + BTn.dot(xt) - b[0];  // (A u - f)_n with the node at (g, x_T)
-    const double s = F * std::max(0.0, -sn);
-    typename Tangential<d>::V xn = Tangential<d>::solve(B.template block<m, m>(1, 1), b.template tail<m>() - BTn * g, s);
+    sn = B(0, 0) * g + BTn.dot(xt) - b[0];
+    const typename T::V xn = T::solve(BTT, c, F * std::max(0.0, -sn));
     const bool same = (xn - xt).norm() <= 1e-15 * xn.norm();
     xt = xn;
     if (same) break;
   }
+  x[0] = g;
   x.template tail<m>() = xt;
+  return B(0, 0) * g + BTn.dot(xt) - b[0];
+}
+
+// Coulomb inside the smoother (Algorithm 2). Every local Coulomb solution must be a fixed point of
+// this rule, else a solution of the whole problem is not a fixed point of the smoother:
+//  - a node on the gap (old x_n == g) first solves on the gap; it stays there while that solution
+//    is compressive (s_n <= 0). A frictionless trial would release its friction force, and where the
+//    block couples normal and tangential (B_nT != 0) the released tangential motion can lift it:
+//    at Hertz F = 5 level 7 that made a node at the edge of the contact zone alternate between
+//    "lifted" and "sticking on the gap" sweep after sweep, and an even number of sweeps per cycle
+//    mapped the iterate onto itself — a non-solution that met the stopping test.
+//  - a node off the gap (or whose gap solution pulls) takes the frictionless trial; if that leaves
+//    it off the obstacle it carries no friction. Never a Tresca bound taken from the residual
+//    before the visit: after a coarse correction a node about to lift can still show a compressive
+//    residual and would stick sideways while it lifts (a prototype failed for F >= 5 that way).
+//  - otherwise it goes onto the gap with the bound of its own new position, as above.
+template <int d>
+Vec<d> solve_node_coulomb(const Mat<d>& B, const Vec<d>& b, double g, double F, const Vec<d>& old) {
+  if (F <= 0) return solve_node_tresca<d>(B, b, g, 0.0);
+  Vec<d> x;
+  if (old[0] >= g && coulomb_on_gap<d>(B, b, g, F, old, x) <= 0) return x;
+  Vec<d> trial = solve_node_tresca<d>(B, b, g, 0.0);
+  if (trial[0] < g) return trial;
+  coulomb_on_gap<d>(B, b, g, F, old, x);
   return x;
 }
 

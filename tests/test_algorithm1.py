@@ -70,15 +70,33 @@ def test_fixed_point_slows_down_for_f_5_on_finer_levels():
     assert out[7] > out[3], out
 
 
-@pytest.mark.xfail(strict=True, reason="known core bug: at level 7, F >= 5 the nmg iterate alternates between two "
-                   "contact states sweep by sweep; with nu1 + nu2 = 6 the cycle maps it onto itself and the "
-                   "correction-norm test stops on a non-solution")
-def test_nmg_result_satisfies_the_conditions_for_f_5_on_level_7():
+def test_nmg_never_reports_a_non_solution_as_converged_at_f_5_level_7():
+    """At F = 5 on level 7 the nonlinear Gauss-Seidel falls into a limit cycle at the edge of the
+    contact zone (16,000 plain sweeps do not settle either), and with an even number of sweeps per
+    cycle the correction norm drops below the tolerance on an iterate that is not a solution
+    (interior residual 0.30 of the largest contact force). The solver must not call that converged:
+    one more sweep moves it, and the result says so."""
     p = hertz.hertz_problem("triangle", 7, 5.0)
     nm = p.solve("nmg")
-    assert nm.converged
     v = contact_conditions(p, nm)
-    assert v["max"] < 1e-8, v  # measured: interior residual 0.30, force at lifted nodes 0.47 (relative)
+    if nm.converged:
+        assert v["max"] < 1e-8, v
+        assert nm.sweep_check <= 1e-9
+    else:
+        assert "stalled" in nm.status or "no convergence" in nm.status, nm.status
+        assert v["max"] > 1e-6, v  # the check is not a false alarm: the iterate is no solution
+        assert nm.sweep_check > 1e3 * 1e-11
+
+
+@pytest.mark.parametrize("F", [0.0, 0.4, 2.0])
+def test_converged_solves_are_fixed_points_of_the_smoother(F):
+    """A solution is a fixed point of the nonlinear smoother: one more sweep from a converged
+    result moves it by less than the tolerance (measured independently with `smooth`)."""
+    p = hertz.hertz_problem("quad", 5, F)
+    r = p.solve("nmg")
+    assert r.converged and r.sweep_check < 1e-11
+    u1 = p.solver.smooth(r.displacement, 1)
+    assert np.abs(u1 - r.displacement).max() < 1e-10 * np.abs(r.displacement).max()
 
 
 def test_fixed_point_reports_non_convergence():

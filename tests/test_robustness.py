@@ -98,3 +98,27 @@ def test_high_aspect_ratio_quads(aspect, max_cycles):
 def test_non_convergence_is_reported():
     res = hertz_variant().solve(max_cycles=2)
     assert not res.converged and res.cycles == 2 and "no convergence" in res.status
+
+
+@pytest.mark.parametrize("law", ["frictionless", "coulomb"])
+@pytest.mark.parametrize("cell", ["triangle", "quad"])
+def test_tilted_obstacle(law, cell):
+    """A plane whose normal is not a coordinate axis: rotated frames at every contact node (the
+    coarsest matrix then changes its sparsity pattern with the truncation, which once corrupted the
+    heap). The solution must satisfy the contact conditions in the tilted frames."""
+    from contactmg.checks import contact_conditions
+
+    base = hertz.hertz_problem(cell, 4, 0.0)
+    p = ContactProblem(base.hierarchy, Material(2000.0, 0.28), [Dirichlet([2], (-0.02, -0.05))], contact_tags=[1],
+                       obstacle=PlaneObstacle((0.0, -0.02), (0.2, -1.0)),
+                       friction=Coulomb(0.3) if law == "coulomb" else Frictionless())
+    res = p.solve()
+    assert res.converged, res.status
+    assert res.counts()["contact_nodes"] > 5
+    assert contact_conditions(p, res)["max"] < 1e-8
+    # the reaction pushes along the plane's normal (frictionless) or within the friction cone
+    n = np.array([0.2, -1.0]) / np.hypot(0.2, 1.0)
+    R = res.reaction
+    rn, rt = R @ n, R @ np.array([-n[1], n[0]])
+    assert rn < 0
+    assert abs(rt) <= (1e-8 if law == "frictionless" else 0.3 + 1e-8) * abs(rn)

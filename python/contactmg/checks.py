@@ -30,7 +30,7 @@ def contact_conditions(problem, result) -> Dict[str, float]:
       bound (Tresca) or 0 (frictionless),
     - slip_direction: max |s_T + s_p u_T/|u_T|| over sliding nodes,
     all divided by the largest |s_n|; and penetration: max (u_n - g) / max |u_n| (relative to the
-    displacement). The contact state is recomputed from u (u_n >= g in contact, u_T == 0 sticking),
+    displacement). The contact state is recomputed from u (u_n >= g in contact, u_T == 0 sticking, both up to round-off),
     not taken from the result."""
     c = problem.contact
     u = np.asarray(result.displacement)
@@ -42,8 +42,12 @@ def contact_conditions(problem, result) -> Dict[str, float]:
     free = ~problem.fixed.astype(bool)
     free[c.nodes] = False
     out = {"interior": float(np.abs(r[free]).max(initial=0.0)) / scale}
-    active = ul[:, 0] >= c.gaps
+    # The core's tests u_n == g and u_T == 0 are exact in its frames; rebuilt here from the canonical
+    # u through a rotated frame they carry round-off, hence the relative tolerance.
+    eps = 1e-12 * max(float(np.abs(u).max(initial=0.0)), float(np.abs(c.gaps).max(initial=0.0)), 1e-300)
+    active = ul[:, 0] >= c.gaps - eps
     ut = np.linalg.norm(ul[:, 1:], axis=1)
+    ut[ut <= eps] = 0.0
     st = np.linalg.norm(sl[:, 1:], axis=1)
     law = problem.law
     if law == "coulomb":

@@ -41,6 +41,9 @@ class ContactResult:
     rebuilds: int
     setup_seconds: float
     solve_seconds: float
+    # ||S(u) - u||_A for one more nonlinear smoothing sweep S at the stop (NaN for linear solves): a
+    # solution is a fixed point of the smoother; a stop is confirmed only when this is tiny.
+    sweep_check: float = float("nan")
     extra: Dict = field(default_factory=dict)
 
     @classmethod
@@ -54,7 +57,8 @@ class ContactResult:
                    history={k: np.asarray(v) for k, v in raw["history"].items()}, converged=bool(raw["converged"]),
                    status=raw["status"], cycles=int(raw["cycles"]),
                    outer_iterations=int(raw["outer_iterations"]) if method == "fixed-point" else None,
-                   rebuilds=int(raw["rebuilds"]), setup_seconds=problem.setup_seconds, solve_seconds=float(raw["seconds"]))
+                   rebuilds=int(raw["rebuilds"]), setup_seconds=problem.setup_seconds, solve_seconds=float(raw["seconds"]),
+                   sweep_check=float(raw["sweep_check"]))
 
     # -- contact quantities ---------------------------------------------------------------------
     @property
