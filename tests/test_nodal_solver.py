@@ -98,31 +98,62 @@ def test_tresca_node_2d_matches_enumeration():
 
 @pytest.mark.parametrize("d", [2, 3])
 def test_coulomb_node_rule(d):
-    """Frictionless trial first; a node left off the obstacle carries no friction; otherwise it sits
-    on the gap with the bound F |s_n| of its own final position: x is the Tresca minimizer (x_n = g)
-    for s = F max(0, -s_n(g, x_T)) — a local fixed point, found where the local map contracts
-    (F |B_Tn| well below the tangential stiffness, as chosen here)."""
+    """The nodal Coulomb rule of the smoother, case by case, for any F (also where F |B_Tn| exceeds
+    the tangential stiffness and the local problem is not monotone):
+    - a node on the gap whose gap solution is compressive stays on the gap;
+    - otherwise the frictionless trial; a node it leaves off the obstacle carries no friction;
+    - otherwise on the gap: x is the Tresca minimizer (x_n = g) for the lagged bound
+      s = F max(0, -s_n(g, old_T))."""
     rng = np.random.default_rng(11 + d)
-    seen = {"off": 0, "on": 0}
-    for _ in range(300):
+    seen = {"kept": 0, "off": 0, "on": 0}
+    for _ in range(600):
         B, b, g, _ = random_case(rng, d)
-        lam = np.linalg.eigvalsh(B[1:, 1:]).min()
         F = rng.choice([0.1, 0.5, 2.0, 40.0])
-        F = min(F, 0.5 * lam / max(np.linalg.norm(B[1:, 0]), 1e-300))
         old = rng.normal(size=d) * 0.3
+        if rng.random() < 0.5:
+            old[0] = g
         x = SOLVE_C[d](B, b, g, F, old)
+        sn_old = B[0, 0] * g + B[0, 1:] @ old[1:] - b[0]
+        s = F * max(0.0, -sn_old)
         trial = SOLVE_T[d](B, b, g, 0.0)
-        if trial[0] < g:
+        sn_new = B[0, 0] * g + B[0, 1:] @ x[1:] - b[0]
+        if old[0] >= g and x[0] == g and sn_new <= 0:
+            seen["kept"] += 1
+        elif trial[0] < g:
             seen["off"] += 1
             np.testing.assert_allclose(x, trial, atol=1e-13)
             continue
-        seen["on"] += 1
+        else:
+            seen["on"] += 1
         assert x[0] == g
-        sn = B[0, 0] * g + B[0, 1:] @ x[1:] - b[0]
-        s = F * max(0.0, -sn)
         assert_kkt(B, b, g, s, x, fix_normal=True, tol=1e-9)
         assert_no_better_point(B, b, g, s, x, rng, fix_normal=True)
-    assert seen["off"] > 10 and seen["on"] > 10
+    assert min(seen.values()) > 10, seen
+
+
+@pytest.mark.parametrize("d", [2, 3])
+def test_local_coulomb_solutions_are_fixed_points_of_the_rule(d):
+    """A local Coulomb solution — on the gap, compressive, x_T the Tresca minimizer for the bound
+    F |s_n(x)| of its own position, sliding or sticking — is returned unchanged when it is the old
+    value: so a solution of the whole problem is a fixed point of the smoother. Built backwards:
+    pick x on the gap, a compressive s_n and x_T, then the b that makes it a solution."""
+    rng = np.random.default_rng(3 + d)
+    for _ in range(300):
+        B, _, g, _ = random_case(rng, d)
+        F = rng.choice([0.1, 0.5, 2.0, 5.0, 40.0])
+        sn = -abs(rng.normal())                       # compressive normal force
+        xt = rng.normal(size=d - 1) * (rng.random() < 0.7)  # sliding, or sticking at 0
+        x = np.concatenate([[g], xt])
+        G = np.empty(d)
+        G[0] = sn
+        if np.any(xt):
+            G[1:] = -F * abs(sn) * xt / np.linalg.norm(xt)
+        else:
+            v = rng.normal(size=d - 1)
+            G[1:] = 0.9 * F * abs(sn) * v / np.linalg.norm(v)   # strictly inside the cone
+        b = B @ x - G                                 # so that B x - b = G
+        y = SOLVE_C[d](B, b, g, F, x)
+        np.testing.assert_allclose(y, x, atol=1e-12 * (1 + np.abs(x).max()))
 
 
 def test_3d_slip_direction_opposes_friction_force():
