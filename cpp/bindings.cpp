@@ -117,6 +117,9 @@ py::dict result_to_dict(const SolveResult& R, Index n, Index nc) {
   out["seconds"] = R.seconds;
   out["rebuild_seconds"] = R.rebuild_seconds;
   out["sweep_check"] = R.sweep_check;
+  py::dict phases;
+  for (int k = 0; k < (int)Phase::Count; ++k) phases[phase_name(k)] = R.phase_seconds[k];
+  out["phase_seconds"] = phases;
   return out;
 }
 

@@ -46,6 +46,7 @@ struct SolveResult {
   int cycles = 0, outer_iterations = 0, rebuilds = 0;
   double seconds = 0, rebuild_seconds = 0;
   double sweep_check = std::numeric_limits<double>::quiet_NaN();  // ||S(u) - u||_A at the stop
+  std::vector<double> phase_seconds;  // indexed by Phase
 };
 
 // A stop on the correction norm is confirmed only if one more smoothing sweep moves the iterate by
@@ -78,6 +79,24 @@ Mat<d> frame_from_normal(const double* nrm, Index c) {
   }
   return Q;
 }
+
+// Where a solve spends its time (SolveResult::phase_seconds): a handful of clock reads per cycle.
+enum class Phase : int { PreSmooth, Linearize, CoarseUpdate, CoarseCorrection, PostSmooth, Norm, Check, Count };
+inline const char* phase_name(int p) {
+  static const char* names[] = {"presmooth", "linearize", "coarse_update", "coarse_correction", "postsmooth", "norm", "check"};
+  return names[p];
+}
+struct PhaseClock {
+  using clock = std::chrono::steady_clock;
+  double* acc;
+  clock::time_point t = clock::now();
+  explicit PhaseClock(double* a) : acc(a) {}
+  void lap(Phase p) {
+    const auto now = clock::now();
+    acc[(int)p] += std::chrono::duration<double>(now - t).count();
+    t = now;
+  }
+};
 
 template <int d>
 class ContactSolver {
@@ -299,6 +318,7 @@ class ContactSolver {
     const Index n = A_.rows;
     rebuilds0_ = cc_.rebuilds();
     untimed_ = 0;
+    std::fill(std::begin(phase_), std::end(phase_), 0.0);
     rebuild_seconds0_ = cc_.rebuild_seconds();
     if (u0) {
       for (Index k = 0; k < n * d; ++k)
@@ -397,24 +417,32 @@ class ContactSolver {
   // Returns ||u_new - u_old||_A.
   template <Law L>
   double cycle(bool& rebuilt) {
+    PhaseClock pc(phase_);
     old_ = u_;
     for (int s = 0; s < cyc_.nu1; ++s) sweep<L>(true);
+    pc.lap(Phase::PreSmooth);
     A_.multiply(u_.data(), r_.data());
     for (std::size_t k = 0; k < r_.size(); ++k) r_[k] = f_[k] - r_[k];
     const bool bounded = linearize<L>();
+    pc.lap(Phase::Linearize);
     rebuilt = mask_ != built_mask_;
     if (rebuilt) {
       cc_.update(A_, built_mask_.data(), mask_.data());
       built_mask_ = mask_;
     }
+    pc.lap(Phase::CoarseUpdate);
     cc_.apply(r_.data(), mask_.data(), lo_.data(), hi_.data(), bounded, u_.data());
+    pc.lap(Phase::CoarseCorrection);
     for (int s = 0; s < cyc_.nu2; ++s) sweep<L>(false);
+    pc.lap(Phase::PostSmooth);
     for (std::size_t k = 0; k < u_.size(); ++k) old_[k] = u_[k] - old_[k];
     A_.multiply(old_.data(), tmp_.data());
     double e = 0;
     for (std::size_t k = 0; k < u_.size(); ++k) { e += old_[k] * tmp_[k]; Au_[k] += tmp_[k]; }
+    pc.lap(Phase::Norm);
     return std::sqrt(std::max(e, 0.0));
   }
+
 
   template <Law L>
   void record(CycleRecord& rec) const {
@@ -465,7 +493,11 @@ class ContactSolver {
         // The stopping test cannot tell a solution from an iterate that the cycle maps back onto
         // itself while the smoother keeps moving it (a limit cycle of the nonlinear Gauss-Seidel,
         // seen for Coulomb at large F). A solution is a fixed point of one sweep: check that.
-        if constexpr (L != Law::Linear) R.sweep_check = sweep_change<L>();
+        if constexpr (L != Law::Linear) {
+          PhaseClock pc(phase_);
+          R.sweep_check = sweep_change<L>();
+          pc.lap(Phase::Check);
+        }
         const double allowed = kSweepCheckFactor * std::max(opt.tol, opt.rtol * first);
         if (R.sweep_check > allowed) {
           R.converged = false;
@@ -507,6 +539,7 @@ class ContactSolver {
     R.seconds = std::chrono::duration<double>(clock::now() - t0).count() - untimed_;
     R.rebuilds = cc_.rebuilds() - rebuilds0_;
     R.rebuild_seconds = cc_.rebuild_seconds() - rebuild_seconds0_;
+    R.phase_seconds.assign(std::begin(phase_), std::end(phase_));
     R.u = u_;
     R.contact_force.assign(nc * d, 0.0);
     R.friction_bound.assign(nc, 0.0);
@@ -536,6 +569,7 @@ class ContactSolver {
   std::vector<double> gap_, coef_, bound_;
   std::vector<Mat<d>> frames_;
   double energy_offset_ = 0;
+  double phase_[(int)Phase::Count] = {};
   double untimed_ = 0;  // seconds spent on error recording, kept out of the timings
   int rebuilds0_ = 0;
   double rebuild_seconds0_ = 0;

@@ -11,6 +11,7 @@ from typing import List, Optional
 
 EXIT_OK, EXIT_BAD_INPUT, EXIT_NO_CONVERGENCE = 0, 2, 3
 MAX_LEVELS = 12
+PLOT_SUFFIXES = (".png", ".pdf", ".svg")
 
 
 def _positive_int(name, lo=1, hi=None):
@@ -50,6 +51,15 @@ def _writable(path: str) -> str:
     return path
 
 
+def _with_suffix(kind: str, suffixes):
+    def parse(path: str) -> str:
+        path = _writable(path)
+        if path != "-" and not path.lower().endswith(tuple(suffixes)):
+            raise argparse.ArgumentTypeError(f"{kind} {path}: unknown format (use {', '.join(suffixes)})")
+        return path
+    return parse
+
+
 def _parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="contactmg", description="Multigrid for elastic contact with Coulomb friction")
     sub = p.add_subparsers(dest="command", required=True)
@@ -65,15 +75,15 @@ def _parser() -> argparse.ArgumentParser:
     h.add_argument("--nu1", type=_positive_int("--nu1", 0, 100), default=3)
     h.add_argument("--nu2", type=_positive_int("--nu2", 0, 100), default=3)
     h.add_argument("--json", type=_writable, metavar="PATH|-")
-    h.add_argument("--vtu", type=_writable, metavar="PATH")
-    h.add_argument("--plot", type=_writable, metavar="PATH")
+    h.add_argument("--vtu", type=_with_suffix("--vtu", (".vtu",)), metavar="PATH")
+    h.add_argument("--plot", type=_with_suffix("--plot", PLOT_SUFFIXES), metavar="PATH")
     h.add_argument("-q", "--quiet", action="store_true")
     t = sub.add_parser("table1", help="Table 1 and Figure 1 of the paper: both algorithms over levels and F")
     t.add_argument("--levels", type=_positive_int("--levels", 1, MAX_LEVELS), nargs="+", default=None)
     t.add_argument("--frictions", type=_nonneg_float("--frictions", positive=True), nargs="+", default=None)
     t.add_argument("--cell", choices=["triangle", "quad"], default="triangle")
     t.add_argument("--json", type=_writable, metavar="PATH|-")
-    t.add_argument("--plot", type=_writable, metavar="PATH")
+    t.add_argument("--plot", type=_with_suffix("--plot", PLOT_SUFFIXES), metavar="PATH")
     t.add_argument("-q", "--quiet", action="store_true")
     return p
 
@@ -107,6 +117,11 @@ def hertz_report(args, problem, result) -> dict:
         "hertz_peak_pressure": hertz.peak_pressure(load) if load > 0 else None,
         "peak_rss_mb": peak_rss_mb(),
     }
+    ref = result.extra.get("reference")
+    if ref is not None:  # --method linear: the nmg solve that gave the contact state, same process
+        out["nmg_cycles"] = ref["cycles"]
+        out["nmg_solve_seconds"] = ref["solve_seconds"]
+        out["nmg_over_linear"] = ref["solve_seconds"] / result.solve_seconds if result.solve_seconds > 0 else None
     return out
 
 

@@ -1,5 +1,7 @@
 """Rigid obstacles: each gives, per contact node, the outward normal n (towards the obstacle) and
-the gap g >= 0 measured along n in the reference configuration."""
+the gap g measured along n in the reference configuration. g >= 0 is the normal case; a negative gap
+is an initial penetration, and it has a defined meaning: the constraint u_n <= g pushes the node
+back out onto the obstacle surface (the solution has u_n = g < 0 there and a compressive force)."""
 from __future__ import annotations
 
 from dataclasses import dataclass

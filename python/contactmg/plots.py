@@ -224,7 +224,7 @@ def plot_convergence(records, ax=None, frictions: Optional[Iterable[float]] = No
         ax.scatter(fx, fy, s=70, facecolors="none", edgecolors="k", lw=1.2, zorder=5, label="no conv.")
     ax.set_xscale("log")
     ax.set_xlabel("number of nodes")
-    ax.set_ylabel("number of V-cycles")
+    ax.set_ylabel(f"number of multigrid cycles ({table.get('cycle_type', 'F(3,3)')})")
     ax.set_title("Figure 1 (left): Algorithm 1 blue, Algorithm 2 red", fontsize=9)
     ax.legend(fontsize=6, ncol=2)
     return ax

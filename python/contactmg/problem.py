@@ -74,6 +74,20 @@ class ContactProblem:
             raise TypeError("friction must be Frictionless(), Tresca(bound) or Coulomb(F)")
         if len(contact_tags) and obstacle is None:
             raise ValueError("contact_tags are given but no obstacle")
+        if obstacle is not None and not callable(getattr(obstacle, "gaps_and_normals", None)):
+            raise TypeError("obstacle must be a PlaneObstacle, a NodalObstacle or an object with "
+                            f"gaps_and_normals(points), got {type(obstacle).__name__}")
+        for bc in dirichlet:
+            if not isinstance(bc, Dirichlet):
+                raise TypeError(f"dirichlet must be a sequence of Dirichlet(tags, value), got a {type(bc).__name__}")
+            if not callable(bc.value) and (np.ndim(bc.value) != 1 or isinstance(bc.value, str)):
+                raise TypeError("a Dirichlet value must be a vector (None for a free component) or a callable, "
+                                f"got {bc.value!r}")
+        for name, nu in (("nu1", nu1), ("nu2", nu2)):
+            if isinstance(nu, bool) or not isinstance(nu, (int, np.integer)) or not 0 <= nu <= 100:
+                raise ValueError(f"{name} must be an integer in 0..100, got {nu!r}")
+        if nu1 + nu2 < 1:
+            raise ValueError("nu1 + nu2 must be at least 1: a cycle needs smoothing")
         t0 = time.perf_counter()
         self.hierarchy, self.material, self.friction = hierarchy, material, friction
         self.cycle, self.nu1, self.nu2 = cycle, nu1, nu2
@@ -185,8 +199,9 @@ class ContactProblem:
                 raise ValueError(f"{name} must be a finite number >= 0, got {v!r}")
         if tol == 0 and rtol == 0:
             raise ValueError("one of tol and rtol must be positive")
-        if not isinstance(max_cycles, (int, np.integer)) or max_cycles < 1:
-            raise ValueError(f"max_cycles must be a positive integer, got {max_cycles!r}")
+        for name, v in (("max_cycles", max_cycles), ("fixed_point_max", fixed_point_max)):
+            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
+                raise ValueError(f"{name} must be a positive integer, got {v!r}")
         kw = dict(tol=tol, rtol=rtol, max_cycles=int(max_cycles), fixed_point_tol=fixed_point_tol,
                   fixed_point_max=int(fixed_point_max), reference=error_reference)
         if method == "fixed-point":
@@ -206,6 +221,8 @@ class ContactProblem:
             res = ContactResult.from_raw(self, raw, method)
             # building its hierarchy for the known state is setup, like the nmg solver's own build
             res.setup_seconds = self.setup_seconds - self._solver_build_seconds + build
+            res.extra["reference"] = {"method": reference.method, "cycles": reference.cycles,
+                                      "solve_seconds": reference.solve_seconds, "converged": reference.converged}
             return res
         return ContactResult.from_raw(self, raw, method)
 

@@ -44,6 +44,9 @@ class ContactResult:
     # ||S(u) - u||_A for one more nonlinear smoothing sweep S at the stop (NaN for linear solves): a
     # solution is a fixed point of the smoother; a stop is confirmed only when this is tiny.
     sweep_check: float = float("nan")
+    # seconds per phase of the cycles: presmooth, linearize, coarse_update, coarse_correction,
+    # postsmooth, norm, check (their sum is the solve time less the per-cycle bookkeeping)
+    phase_seconds: Dict[str, float] = field(default_factory=dict)
     extra: Dict = field(default_factory=dict)
 
     @classmethod
@@ -58,7 +61,7 @@ class ContactResult:
                    status=raw["status"], cycles=int(raw["cycles"]),
                    outer_iterations=int(raw["outer_iterations"]) if method == "fixed-point" else None,
                    rebuilds=int(raw["rebuilds"]), setup_seconds=problem.setup_seconds, solve_seconds=float(raw["seconds"]),
-                   sweep_check=float(raw["sweep_check"]))
+                   sweep_check=float(raw["sweep_check"]), phase_seconds=dict(raw["phase_seconds"]))
 
     # -- contact quantities ---------------------------------------------------------------------
     @property

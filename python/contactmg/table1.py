@@ -56,6 +56,7 @@ def table1(levels: Sequence[int] = DEFAULT_LEVELS, frictions: Sequence[float] = 
             for i, F in enumerate(frictions):
                 bar.set_postfix(level=L, F=F)
                 p = hertz_problem(cell, L, F, coulomb_at_zero=True)
+                out["cycle_type"] = f"{p.cycle}({p.nu1},{p.nu2})"
                 if i == 0:
                     out["nodes"].append(int(p.mesh.num_points))
                     out["dofs"].append(int(p.mesh.num_points * p.mesh.dim))
