@@ -193,7 +193,7 @@ def convergence_records(table: Dict) -> List[Dict]:
 
 
 def plot_convergence(records, ax=None, frictions: Optional[Iterable[float]] = None):
-    """Figure 1 left: total V-cycles against the number of nodes (log x axis), Algorithm 1 (fixed
+    """Figure 1 left: total multigrid cycles (the paper's V-cycles) against the number of nodes (log x axis), Algorithm 1 (fixed
     point) blue, Algorithm 2 (nmg) red, one curve per friction coefficient (its own marker and line
     style, labelled "Alg. 1, F=..." / "Alg. 2, F=...").
 
@@ -201,6 +201,7 @@ def plot_convergence(records, ax=None, frictions: Optional[Iterable[float]] = No
     method ("fixed-point" or "nmg"), cycles and optionally converged (e.g. the JSON reports of
     `contactmg hertz`). Runs that did not converge are ringed in black (label "no conv.")."""
     ax = _axes(ax, figsize=(6, 4.5))
+    cycle_type = records.get("cycle_type", "F(3,3)") if isinstance(records, dict) else None
     if isinstance(records, dict):
         records = convergence_records(records)
     records = list(records)
@@ -224,7 +225,7 @@ def plot_convergence(records, ax=None, frictions: Optional[Iterable[float]] = No
         ax.scatter(fx, fy, s=70, facecolors="none", edgecolors="k", lw=1.2, zorder=5, label="no conv.")
     ax.set_xscale("log")
     ax.set_xlabel("number of nodes")
-    ax.set_ylabel(f"number of multigrid cycles ({table.get('cycle_type', 'F(3,3)')})")
+    ax.set_ylabel("number of multigrid cycles" + (f" ({cycle_type})" if cycle_type else ""))
     ax.set_title("Figure 1 (left): Algorithm 1 blue, Algorithm 2 red", fontsize=9)
     ax.legend(fontsize=6, ncol=2)
     return ax
