@@ -5,12 +5,22 @@
 
 namespace cmg {
 
+using ColIndex = std::int32_t;
+
+// Block rows/columns must fit ColIndex.
+inline void check_block_count(Index n) {
+  if (n > (Index)std::numeric_limits<ColIndex>::max())
+    throw InputError("too many nodes for one matrix (" + std::to_string(n) + ")");
+}
+
 template <int d>
 struct BlockMatrix {
   static constexpr int bs = d * d;
   Index rows = 0, cols = 0;          // in blocks
   std::vector<Index> indptr;         // rows + 1
-  std::vector<Index> indices;        // block column of each stored block, sorted per row
+  // Block column of each stored block, sorted per row. 32 bits: the sweeps and products stream the
+  // matrix and are bound by memory bandwidth, and 64-bit columns were a fifth of the bytes read.
+  std::vector<ColIndex> indices;
   std::vector<double> values;        // nnz * d * d, each block row-major
   std::vector<Index> diag;           // position of the diagonal block per row (-1 if absent)
 
@@ -64,7 +74,7 @@ struct BlockMatrix {
   }
 
   std::size_t memory_bytes() const {
-    return sizeof(Index) * (indptr.size() + indices.size() + diag.size()) + sizeof(double) * values.size();
+    return sizeof(Index) * (indptr.size() + diag.size()) + sizeof(ColIndex) * indices.size() + sizeof(double) * values.size();
   }
 };
 
@@ -72,6 +82,7 @@ struct BlockMatrix {
 // every pair of nodes in one group is coupled.
 template <int d>
 BlockMatrix<d> pattern_from_groups(Index n, const Index* groups, Index num_groups, int group_size) {
+  check_block_count(n);
   std::vector<Index> count(n + 1, 0);
   // Upper bound per row first, then sort and unique in place.
   for (Index g = 0; g < num_groups; ++g)

@@ -15,6 +15,8 @@ BlockMatrix<d> make_prolongation(Index n_fine, Index n_coarse, const Index* ptr,
   BlockMatrix<d> P;
   P.rows = n_fine;
   P.cols = n_coarse;
+  check_block_count(n_fine);
+  check_block_count(n_coarse);
   P.indptr.assign(ptr, ptr + n_fine + 1);
   P.indices.resize(ptr[n_fine]);
   P.values.assign(ptr[n_fine] * d * d, 0.0);
