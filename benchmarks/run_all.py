@@ -24,6 +24,8 @@ def main():
         ["work_precision.py", "--levels", "5", "6", "7"] + ([] if a.quick else ["8"]) + ["--out", a.out],
         ["discretization_error.py", "--levels", "3", str(top - 2), "--reference", str(top), "--out", a.out],
     ]
+    if not a.quick:  # issue 4: Algorithm 1 at F = 5 up to the finest uniform level that fits (about 10 minutes)
+        jobs.append(["fixed_point_F5.py", "--start", "6", "--stop", "9", "--out", a.out])
     for job in jobs:
         print(f"== {' '.join(job)}", flush=True)
         subprocess.run([sys.executable, os.path.join(HERE, job[0])] + job[1:], check=True)

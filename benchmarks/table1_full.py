@@ -20,7 +20,9 @@ from contactmg.hertz import PAPER_FRICTIONS
 from contactmg.table1 import failed_runs, format_table, merge_levels, save_figures, table1
 
 # Table 1 of the paper (fixed-point iterations, TOL = 1e-9; None = no convergence), on its adaptive
-# levels 3, 5, 7, 9, 11.
+# levels 3, 5, 7, 9, 11. Legible in our plain-text copy of the paper: the rows F = 1.1 ... 40 and the
+# level-11 column of the rows F <= 1.0; the other entries of the rows F <= 1.0 come from an earlier
+# reading and could not be checked against that copy.
 PAPER_DOFS = [94, 830, 4674, 44200, 334818]
 PAPER_TABLE1 = {0.08: [1, 5, 6, 6, 6], 0.4: [1, 5, 10, 10, 10], 0.7: [1, 5, 8, 12, 13], 0.9: [1, 6, 9, 15, 15],
                 1.0: [1, 6, 10, 10, 16], 1.1: [1, 6, 10, 16, 18], 2.0: [1, 6, 8, 19, 33], 5.0: [1, 2, 2, None, None],
