@@ -63,6 +63,11 @@ def test_clockwise_cells_are_reoriented():
 @pytest.mark.parametrize("points,cells,cell_type,match", [
     (np.array([[0, 0], [1, 0], [2, 0.0]]), np.array([[0, 1, 2]]), "triangle", "degenerate"),
     (np.array([[0, 0], [1, 0], [0.2, 0.2], [0, 1.0]]), np.array([[0, 1, 2, 3]]), "quad", "not convex"),
+    # the second triangle is inverted: folded back over the first across their shared edge 1-2
+    (np.array([[0, 0], [1, 0], [0, 1], [0.2, 0.2]]), np.array([[0, 1, 2], [1, 2, 3]]), "triangle", "inverted"),
+    # a convex trapezoid folded into the unit square across their shared edge 0-1
+    (np.array([[0, 0], [1, 0], [1, 1], [0, 1], [0.2, 0.5], [0.8, 0.5]]),
+     np.array([[0, 1, 2, 3], [1, 0, 4, 5]]), "quad", "inverted"),
     (np.array([[0, 0], [1, np.nan], [0, 1.0]]), np.array([[0, 1, 2]]), "triangle", "non-finite"),
     (np.array([[0, 0], [1, 0], [0, 1.0]]), np.array([[0, 1, 3]]), "triangle", "outside"),
     (np.array([[0, 0], [1, 0], [0, 1.0]]), np.array([[0, 1, 1]]), "triangle", "repeats"),

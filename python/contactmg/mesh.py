@@ -19,6 +19,20 @@ _LOCAL_FACETS = {
 }
 
 
+def _check_not_folded(cells: np.ndarray) -> None:
+    """Cells oriented counter-clockwise one by one still overlap if one was inverted (folded over
+    its neighbour): then a shared edge is traversed twice in the same direction, where a valid
+    mesh traverses every interior edge once each way."""
+    k = cells.shape[1]
+    e = np.stack([cells, np.roll(cells, -1, axis=1)], axis=-1).reshape(-1, 2)
+    _, first, count = np.unique(e, axis=0, return_index=True, return_counts=True)
+    if np.any(count > 1):
+        a, b = e[first[np.argmax(count > 1)]]
+        cell = int(first[np.argmax(count > 1)] // k)
+        raise ValueError(f"the mesh is inverted or overlaps itself near cell {cell}: edge {a}-{b} is shared by "
+                         "two cells on the same side")
+
+
 def _signed_area(X: np.ndarray) -> np.ndarray:
     """Shoelace formula for polygons X (m, k, 2)."""
     x, y = X[..., 0], X[..., 1]
@@ -112,6 +126,7 @@ class Mesh:
                 bad = np.any(corner <= 1e-12 * h[:, None] ** 2, axis=1)
                 if np.any(bad):
                     raise ValueError(f"cell {int(np.argmax(bad))} (quad) is not convex or intersects itself")
+            _check_not_folded(cells)
         elif self.cell_type == "tetra":
             vol = _tet_volume(X)
             small = np.abs(vol) <= 1e-12 * h ** 3
