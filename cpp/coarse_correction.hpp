@@ -16,7 +16,11 @@ enum class CycleType : int { V = 0, W = 1, F = 2 };
 struct CycleOptions {
   CycleType cycle = CycleType::V;
   int nu1 = 3, nu2 = 3;
-  int coarsest_max_sweeps = 2000;  // projected Gauss-Seidel on the coarsest level when it has bounds
+  // Projected Gauss-Seidel sweeps on the coarsest level when its exact solve violates the bounds.
+  // Each sweep lowers the energy, so any number keeps the cycle monotone; on the Hertz benchmark
+  // (triangles levels 3-7, quads 3-6, F = 0.4 and 5) 10, 50, 200 and 2000 gave the same cycle
+  // counts, and 2000 (run to a relative change of 1e-14) cost 84 % of a quad level-3 solve.
+  int coarsest_max_sweeps = 50;
 };
 
 template <int d>

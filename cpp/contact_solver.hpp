@@ -485,7 +485,11 @@ class ContactSolver {
       const double cn = rec.correction_norm;
       if (first < 0) first = cn;
       if (!std::isfinite(cn) || (cn > opt.divergence_factor * first && first > 0)) {
-        R.status = "diverged: correction norm " + std::to_string(cn) + " at cycle " + std::to_string(it);
+        R.status = std::isfinite(cn)
+                       ? "diverged: correction norm " + fmt(cn) + " at cycle " + std::to_string(it) + ", " +
+                             fmt(cn / first) + " times the first"
+                       : "diverged: the iterate is no longer finite at cycle " + std::to_string(it) +
+                             " (overflow: are the load and the material of sensible magnitude?)";
         R.converged = false;
         return false;
       }

@@ -122,3 +122,14 @@ def test_tilted_obstacle(law, cell):
     rn, rt = R @ n, R @ np.array([-n[1], n[0]])
     assert rn < 0
     assert abs(rt) <= (1e-8 if law == "frictionless" else 0.3 + 1e-8) * abs(rn)
+
+
+def test_overflow_is_reported_as_divergence():
+    """A finite load so large that the iterates overflow: the solve stops at once and says so."""
+    base = hertz.hertz_problem("triangle", 4, 0.4)
+    p = ContactProblem(base.hierarchy, Material(2000.0, 0.28), [Dirichlet([2], (0.0, -0.005))], contact_tags=[1],
+                       obstacle=PlaneObstacle((0.0, 0.0), (0.0, -1.0)), friction=Coulomb(0.4),
+                       body_force=(0.0, -1e300))
+    res = p.solve()
+    assert not res.converged and res.cycles == 1
+    assert res.status.startswith("diverged") and "no longer finite" in res.status
