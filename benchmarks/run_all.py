@@ -23,6 +23,7 @@ def main():
         ["scaling.py", "--cell", "quad", "--levels", "3", str(top - 1), "--out", a.out],
         ["work_precision.py", "--levels", "5", "6", "7"] + ([] if a.quick else ["8"]) + ["--out", a.out],
         ["skip_work.py", "--level", str(top - 1), "--out", a.out],
+        ["stress.py", "--level", str(top - 2), "--out", a.out],
         ["discretization_error.py", "--levels", "3", str(top - 2), "--reference", str(top), "--out", a.out],
     ]
     if not a.quick:  # issue 4: Algorithm 1 at F = 5 up to the finest uniform level that fits (about 10 minutes)

@@ -29,7 +29,8 @@ def contact_conditions(problem, result) -> Dict[str, float]:
     - friction_bound: max (|s_T| - s_p) over nodes in contact, s_p = F_p |s_n| (Coulomb), the given
       bound (Tresca) or 0 (frictionless),
     - slip_direction: max |s_T + s_p u_T/|u_T|| over sliding nodes,
-    all divided by the largest |s_n|; and penetration: max (u_n - g) / max |u_n| (relative to the
+    all divided by the force scale (the largest contact force, support reaction or load; the
+    stiffness scale max|A| max|u| for a body that carries no force); and penetration: max (u_n - g) / max |u_n| (relative to the
     displacement). The contact state is recomputed from u (u_n >= g in contact, u_T == 0 sticking, both up to round-off),
     not taken from the result."""
     c = problem.contact
@@ -38,8 +39,17 @@ def contact_conditions(problem, result) -> Dict[str, float]:
     Q = _frames(c.normals)
     ul = np.einsum("cji,cj->ci", Q, u[c.nodes])
     sl = np.einsum("cji,cj->ci", Q, r[c.nodes])
-    scale = max(float(np.abs(sl[:, 0]).max(initial=0.0)), 1e-300)
-    free = ~problem.fixed.astype(bool)
+    # Forces are measured against the force scale of the problem: the largest contact force, support
+    # reaction or load. A body that carries no force at all (pushed onto nothing, it only translates)
+    # has none; there the stiffness scale max|A| max|u| measures what round-off is.
+    fixed = problem.fixed.astype(bool)
+    scale = max(float(np.abs(sl[:, 0]).max(initial=0.0)), float(np.abs(r[fixed]).max(initial=0.0)),
+                float(np.abs(problem.load).max(initial=0.0)))
+    stiffness = float(np.abs(problem.A.data).max(initial=0.0)) * float(np.abs(u).max(initial=0.0))
+    if scale <= 1e-9 * stiffness:
+        scale = stiffness
+    scale = max(scale, 1e-300)
+    free = ~fixed
     free[c.nodes] = False
     out = {"interior": float(np.abs(r[free]).max(initial=0.0)) / scale}
     # The core's tests u_n == g and u_T == 0 are exact in its frames; rebuilt here from the canonical
