@@ -234,11 +234,21 @@ class CoarseCorrection {
     // it once and refactorizing a different pattern wrote out of bounds (tilted obstacles). The
     // coarsest matrix is small, so it is analysed every time.
     ldlt_.compute(S);
-    if (ldlt_.info() != Eigen::Success)
-      throw InputError("the coarsest-level matrix is singular: is rigid-body motion left free by the Dirichlet conditions?");
+    if (!factorization_ok()) {
+      // Truncation through rotated fine frames can make coarse dofs linearly dependent: the Galerkin
+      // matrix is then only semi-definite, with a right-hand side P~^T r in its range. Solving with
+      // A + eps diag(A) still lowers the energy (J(x) = -x^T A x / 2 - eps x^T D x <= 0).
+      for (Index k = 0; k < n; ++k) S.coeffRef(k, k) *= 1 + 1e-10;
+      ldlt_.compute(S);
+      if (!factorization_ok())
+        throw InputError("the coarsest-level matrix is singular: is rigid-body motion left free by the Dirichlet conditions?");
+    }
+  }
+
+  bool factorization_ok() const {
+    if (ldlt_.info() != Eigen::Success) return false;
     const auto D = ldlt_.vectorD();
-    if (!(D.minCoeff() > 1e-13 * D.cwiseAbs().maxCoeff()))
-      throw InputError("the coarsest-level matrix is not positive definite: the Dirichlet conditions leave rigid-body motion free");
+    return D.minCoeff() > 1e-13 * D.cwiseAbs().maxCoeff();
   }
 
   void solve_coarsest() {

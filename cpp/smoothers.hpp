@@ -15,6 +15,25 @@ double max_diagonal(const BlockMatrix<d>& A) {
   return m;
 }
 
+// Inverse of a symmetric positive semi-definite diagonal block; where the block is singular (a
+// truncated coarse node whose x and y dofs both map onto the one tangential direction of rotated
+// fine frames) the pseudo-inverse: the minimum-norm exact minimizer over the block, so the sweep
+// still lowers the energy, where the plain inverse gave inf/NaN.
+template <int d>
+Mat<d> block_inverse(const Mat<d>& D) {
+  Eigen::LLT<Mat<d>> llt(D);
+  const double top = D.diagonal().cwiseAbs().maxCoeff();
+  if (llt.info() == Eigen::Success && llt.matrixL().toDenseMatrix().diagonal().minCoeff() > 1e-6 * std::sqrt(top))
+    return D.inverse();
+  Eigen::SelfAdjointEigenSolver<Mat<d>> es(D);
+  const auto ev = es.eigenvalues();
+  const double cut = 1e-12 * std::max(ev.cwiseAbs().maxCoeff(), 1e-300);
+  Mat<d> inv = Mat<d>::Zero();
+  for (int k = 0; k < d; ++k)
+    if (ev[k] > cut) inv += es.eigenvectors().col(k) * es.eigenvectors().col(k).transpose() / ev[k];
+  return inv;
+}
+
 // Inverted diagonal blocks of the rows [first, last). A component whose diagonal entry is zero up
 // to round-off (relative to `scale`) has an empty row and column — a truncated or unused dof, or
 // one emptied by incremental coarse updates: it is inert, inverted as identity, and with its
@@ -33,7 +52,7 @@ void invert_diagonal(const BlockMatrix<d>& A, std::vector<double>& Dinv, std::ve
       inert[i * d + c] = D(c, c) <= thr;
       if (inert[i * d + c]) { D.row(c).setZero(); D.col(c).setZero(); D(c, c) = 1; }
     }
-    MatMap<d>(Dinv.data() + i * d * d) = D.inverse();
+    MatMap<d>(Dinv.data() + i * d * d) = block_inverse<d>(D);
   }
 }
 

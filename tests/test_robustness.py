@@ -137,3 +137,22 @@ def test_overflow_is_reported_as_divergence():
     res = p.solve()
     assert not res.converged and res.cycles == 1
     assert res.status.startswith("diverged") and "no longer finite" in res.status
+
+
+@pytest.mark.parametrize("cell", ["triangle", "quad"])
+def test_plane_cutting_through_the_body_at_57_degrees(cell):
+    """A plane tilted by 1 rad through the lowest point cuts deep into the disk (gaps down to
+    -0.18): the arc must be pushed out onto it. Truncating the normals of rotated frames makes coarse
+    x and y dofs dependent (singular diagonal blocks, a singular coarsest matrix), which once gave
+    NaN at the first cycle; now a verified solution."""
+    from contactmg.checks import contact_conditions
+
+    base = hertz.hertz_problem(cell, 3, 0.0)
+    n = np.array([np.sin(1.0), -np.cos(1.0)])
+    p = ContactProblem(base.hierarchy, Material(12423.0, 0.0), [Dirichlet([2], (0.0, 0.0))], contact_tags=[1],
+                       obstacle=PlaneObstacle((0.0, 0.0), tuple(n)), friction=Frictionless())
+    assert p.contact.gaps.min() < -0.15
+    res = p.solve()
+    assert res.converged, res.status
+    assert np.all(np.isfinite(res.displacement))
+    assert contact_conditions(p, res)["max"] < 1e-8

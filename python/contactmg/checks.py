@@ -24,11 +24,12 @@ def contact_conditions(problem, result) -> Dict[str, float]:
     `problem`), each >= 0, plus "max", their maximum:
 
     - interior: max |(A u - f)| over the free dofs off the contact boundary,
-    - inactive_force: max |(A u - f)_p| over contact nodes off the obstacle (u_n < g),
+    - inactive_force: max |s_n| over contact nodes off the obstacle (u_n < g), and |s_T| there
+      unless friction acts there (Tresca),
     - tension: max (A u - f)_{p,n} over nodes in contact (must be <= 0),
-    - friction_bound: max (|s_T| - s_p) over nodes in contact, s_p = F_p |s_n| (Coulomb), the given
-      bound (Tresca) or 0 (frictionless),
-    - slip_direction: max |s_T + s_p u_T/|u_T|| over sliding nodes,
+    - friction_bound: max (|s_T| - s_p) where friction acts (Coulomb: nodes in contact, s_p =
+      F_p |s_n|; Tresca: every contact node, the given bound; frictionless: nodes in contact, 0),
+    - slip_direction: max |s_T + s_p u_T/|u_T|| over the nodes where friction acts and u_T != 0,
     all divided by the force scale (the largest contact force, support reaction or load; the
     stiffness scale max|A| max|u| for a body that carries no force); and penetration: max (u_n - g) / max |u_n| (relative to the
     displacement). The contact state is recomputed from u (u_n >= g in contact, u_T == 0 sticking, both up to round-off),
@@ -60,16 +61,20 @@ def contact_conditions(problem, result) -> Dict[str, float]:
     ut[ut <= eps] = 0.0
     st = np.linalg.norm(sl[:, 1:], axis=1)
     law = problem.law
+    # Where friction acts: Coulomb at nodes in contact (bound F |s_n|); Tresca at every contact node,
+    # touching or not (its bound is given, DESIGN section 4); frictionless nowhere.
     if law == "coulomb":
-        s = problem.coefficients * np.abs(sl[:, 0])
+        s, rubs = problem.coefficients * np.abs(sl[:, 0]), active
     elif law == "tresca":
-        s = problem.coefficients
+        s, rubs = problem.coefficients, np.ones(len(c.nodes), bool)
     else:
-        s = np.zeros(len(c.nodes))
-    out["inactive_force"] = float(np.abs(sl[~active]).max(initial=0.0)) / scale
+        s, rubs = np.zeros(len(c.nodes)), active
+    off = ~active
+    out["inactive_force"] = max(float(np.abs(sl[off, 0]).max(initial=0.0)),
+                                float(st[off & ~rubs].max(initial=0.0))) / scale
     out["tension"] = max(0.0, float(sl[active, 0].max(initial=0.0))) / scale
-    out["friction_bound"] = max(0.0, float((st - s)[active].max(initial=0.0))) / scale
-    slide = active & (ut > 0)
+    out["friction_bound"] = max(0.0, float((st - s)[rubs].max(initial=0.0))) / scale
+    slide = rubs & (ut > 0)
     if np.any(slide):
         dev = sl[slide, 1:] + s[slide, None] * ul[slide, 1:] / ut[slide, None]
         out["slip_direction"] = float(np.linalg.norm(dev, axis=1).max()) / scale
