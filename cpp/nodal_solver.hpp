@@ -105,10 +105,11 @@ template <int d>
 Vec<d> solve_node_coulomb(const Mat<d>& B, const Vec<d>& b, double g, double F, const Vec<d>& old) {
   if (F <= 0) return solve_node_tresca<d>(B, b, g, 0.0);
   Vec<d> x;
-  if (old[0] >= g && coulomb_on_gap<d>(B, b, g, F, old, x) <= 0) return x;
+  const bool on_gap = old[0] >= g;
+  if (on_gap && coulomb_on_gap<d>(B, b, g, F, old, x) <= 0) return x;
   Vec<d> trial = solve_node_tresca<d>(B, b, g, 0.0);
   if (trial[0] < g) return trial;
-  coulomb_on_gap<d>(B, b, g, F, old, x);
+  if (!on_gap) coulomb_on_gap<d>(B, b, g, F, old, x);  // else x holds it already (same inputs)
   return x;
 }
 
