@@ -12,7 +12,7 @@ from typing import Dict
 
 import numpy as np
 
-from .problem import _frames
+from .frames import to_local
 
 # A solve that met its stopping test but violates the conditions by more than this (relative) did
 # not find a solution.
@@ -31,15 +31,16 @@ def contact_conditions(problem, result) -> Dict[str, float]:
       F_p |s_n|; Tresca: every contact node, the given bound; frictionless: nodes in contact, 0),
     - slip_direction: max |s_T + s_p u_T/|u_T|| over the nodes where friction acts and u_T != 0,
     all divided by the force scale (the largest contact force, support reaction or load; the
-    stiffness scale max|A| max|u| for a body that carries no force); and penetration: max (u_n - g) / max |u_n| (relative to the
-    displacement). The contact state is recomputed from u (u_n >= g in contact, u_T == 0 sticking, both up to round-off),
+    stiffness scale max|A| max|u| for a body that carries no force); and penetration: max (u_n - g)
+    divided by the displacement scale of the problem (the largest displacement, prescribed
+    displacement or gap; it does not vanish when every gap and normal displacement is zero). The contact state is recomputed from u (u_n >= g in contact, u_T == 0 sticking, both up to round-off),
     not taken from the result."""
     c = problem.contact
     u = np.asarray(result.displacement)
     r = problem.A.matvec(u) - problem.load
-    Q = _frames(c.normals)
-    ul = np.einsum("cji,cj->ci", Q, u[c.nodes])
-    sl = np.einsum("cji,cj->ci", Q, r[c.nodes])
+    Q = result.contact_frames
+    ul = to_local(Q, u[c.nodes])
+    sl = to_local(Q, r[c.nodes])
     # Forces are measured against the force scale of the problem: the largest contact force, support
     # reaction or load. A body that carries no force at all (pushed onto nothing, it only translates)
     # has none; there the stiffness scale max|A| max|u| measures what round-off is.
@@ -80,7 +81,10 @@ def contact_conditions(problem, result) -> Dict[str, float]:
         out["slip_direction"] = float(np.linalg.norm(dev, axis=1).max()) / scale
     else:
         out["slip_direction"] = 0.0
-    un = max(float(np.abs(ul[:, 0]).max(initial=0.0)), 1e-300)
-    out["penetration"] = max(0.0, float((ul[:, 0] - c.gaps).max(initial=0.0))) / un
+    # Not max |u_n|: on a tilted plane with zero gaps every u_n is round-off. The displacement scale
+    # of a loaded body is positive: it moves, or is held by prescribed displacements, or its gaps are.
+    disp = max(float(np.abs(u).max(initial=0.0)), float(np.abs(problem.fixed_values).max(initial=0.0)),
+               float(np.abs(c.gaps).max(initial=0.0)), 1e-300)
+    out["penetration"] = max(0.0, float((ul[:, 0] - c.gaps).max(initial=0.0))) / disp
     out["max"] = max(out.values())
     return out

@@ -28,9 +28,11 @@ def hertz_problem(cell: str = "triangle", levels: int = 6, friction: float = 0.4
     mesh = hertz_half_disk(cell)
     hierarchy = MeshHierarchy.build(mesh, levels, projector=hertz_projector(CENTER, RADIUS))
     law = Coulomb(friction) if (friction > 0 or coulomb_at_zero) else Frictionless()
-    return ContactProblem(hierarchy, material or Material(E, NU), [Dirichlet([HERTZ_TOP], (0.0, TOP_DISPLACEMENT))],
-                          contact_tags=[HERTZ_ARC], obstacle=PlaneObstacle((0.0, 0.0), (0.0, -1.0)), friction=law,
-                          cycle=cycle, nu1=nu1, nu2=nu2)
+    problem = ContactProblem(hierarchy, material or Material(E, NU), [Dirichlet([HERTZ_TOP], (0.0, TOP_DISPLACEMENT))],
+                             contact_tags=[HERTZ_ARC], obstacle=PlaneObstacle((0.0, 0.0), (0.0, -1.0)), friction=law,
+                             cycle=cycle, nu1=nu1, nu2=nu2)
+    problem.benchmark = "hertz"  # zones centred on x = 0: results have contact_halfwidth, stick_halfwidth
+    return problem
 
 
 def halfwidth(load: float, radius: float = RADIUS, material: Material = Material(E, NU)) -> float:

@@ -2,7 +2,10 @@
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass
+
+import numpy as np
 
 
 @dataclass(frozen=True)
@@ -13,8 +16,12 @@ class Material:
     def __post_init__(self):
         for name in ("E", "nu"):
             v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, (int, float)):
+            # any real number (numpy scalars and 0-d arrays too), stored as a float
+            if isinstance(v, np.ndarray) and v.ndim == 0 and v.dtype.kind in "iuf":
+                v = v[()]
+            if isinstance(v, (bool, np.bool_)) or not isinstance(v, numbers.Real):
                 raise TypeError(f"{name} must be a number, got {type(v).__name__}")
+            object.__setattr__(self, name, float(v))
         if not (math.isfinite(self.E) and self.E > 0):
             raise ValueError(f"Young's modulus E must be positive and finite, got {self.E}")
         if not (-1.0 < self.nu < 0.5):

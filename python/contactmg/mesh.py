@@ -33,6 +33,84 @@ def _check_not_folded(cells: np.ndarray) -> None:
                          "two cells on the same side")
 
 
+def _check_manifold(cells: np.ndarray, cell_type: str) -> None:
+    """Every facet of the cells belongs to one cell (boundary) or two (interior), never more."""
+    local = np.array(_LOCAL_FACETS[cell_type])
+    key = np.sort(cells[:, local].reshape(-1, local.shape[1]), axis=1)
+    _, first, count = np.unique(key, axis=0, return_index=True, return_counts=True)
+    if np.any(count > 2):
+        i = int(np.argmax(count > 2))
+        raise ValueError(f"the mesh is not a manifold: facet {key[first[i]].tolist()} is shared by {int(count[i])} cells "
+                         f"(cell {int(first[i] // len(local))} and others); an interior facet belongs to exactly two")
+
+
+def _check_no_overlap_2d(pts: np.ndarray, cells: np.ndarray) -> None:
+    """Cells that overlap without sharing an edge (the edge test of _check_not_folded cannot see
+    them): no node lies inside a cell it does not belong to, and no two edges cross. Candidate
+    pairs come from a k-d tree of cell centres, so the cost stays near linear."""
+    from scipy.spatial import cKDTree
+
+    X = pts[cells]
+    centre = X.mean(axis=1)
+    radius = np.linalg.norm(X - centre[:, None, :], axis=-1).max(axis=1)
+    tree = cKDTree(centre)
+    pairs = tree.query_pairs(2.0 * float(radius.max()), output_type="ndarray")
+    if len(pairs) == 0:
+        return
+    a, b = pairs[:, 0], pairs[:, 1]
+    near = np.linalg.norm(centre[a] - centre[b], axis=1) <= radius[a] + radius[b]
+    a, b = a[near], b[near]
+    k = cells.shape[1]
+    h = radius.max()
+    tol = 1e-10 * h * h
+    for p, q in ((a, b), (b, a)):
+        # a node of cell q strictly inside cell p (cells are counter-clockwise and convex)
+        for j in range(k):
+            node = cells[q, j]
+            y = pts[node]
+            inside = np.ones(len(p), bool)
+            for i in range(k):
+                e0, e1 = X[p, i], X[p, (i + 1) % k]
+                cross = (e1[:, 0] - e0[:, 0]) * (y[:, 1] - e0[:, 1]) - (e1[:, 1] - e0[:, 1]) * (y[:, 0] - e0[:, 0])
+                inside &= cross > tol
+            if np.any(inside):
+                i = int(np.argmax(inside))
+                raise ValueError(f"the mesh overlaps itself: node {int(node[i])} lies inside cell {int(p[i])}")
+    # two edges that cross at interior points of both
+    for i in range(k):
+        for j in range(k):
+            p0, p1 = X[a, i], X[a, (i + 1) % k]
+            q0, q1 = X[b, j], X[b, (j + 1) % k]
+
+            def side(u, v, w):
+                return (v[:, 0] - u[:, 0]) * (w[:, 1] - u[:, 1]) - (v[:, 1] - u[:, 1]) * (w[:, 0] - u[:, 0])
+
+            d1, d2, d3, d4 = side(p0, p1, q0), side(p0, p1, q1), side(q0, q1, p0), side(q0, q1, p1)
+            cross = (((d1 > tol) & (d2 < -tol)) | ((d1 < -tol) & (d2 > tol))) & \
+                    (((d3 > tol) & (d4 < -tol)) | ((d3 < -tol) & (d4 > tol)))
+            if np.any(cross):
+                m = int(np.argmax(cross))
+                raise ValueError(f"the mesh overlaps itself: an edge of cell {int(a[m])} crosses an edge of cell {int(b[m])}")
+
+
+def connected_components(cells: np.ndarray, num_points: int):
+    """(count, label): the connected pieces of the mesh (cells joined through shared nodes);
+    label[i] is the piece of node i, -1 for a node that belongs to no cell."""
+    import scipy.sparse as sp
+    from scipy.sparse.csgraph import connected_components as components
+
+    k = cells.shape[1]
+    rows = np.repeat(cells[:, 0], k - 1)
+    cols = cells[:, 1:].ravel()
+    used = np.zeros(num_points, bool)
+    used[cells.ravel()] = True
+    g = sp.coo_matrix((np.ones(len(rows), np.int8), (rows, cols)), shape=(num_points, num_points))
+    _, label = components(g, directed=False)
+    label = np.where(used, label, -1)
+    ids, label[used] = np.unique(label[used], return_inverse=True)
+    return len(ids), label
+
+
 def _signed_area(X: np.ndarray) -> np.ndarray:
     """Shoelace formula for polygons X (m, k, 2)."""
     x, y = X[..., 0], X[..., 1]
@@ -50,6 +128,49 @@ def boundary_facets(cells: np.ndarray, cell_type: str) -> np.ndarray:
     key = np.sort(all_f, axis=1)
     _, inverse, counts = np.unique(key, axis=0, return_inverse=True, return_counts=True)
     return np.ascontiguousarray(all_f[counts[inverse.ravel()] == 1])
+
+
+def _integer_tags(tags, count: int) -> np.ndarray:
+    """Facet tags as int64; floats are accepted only when they hold integers (NaN is no tag)."""
+    tags = np.asarray(tags)
+    if tags.shape != (count,):
+        raise ValueError(f"facet_tags must have shape ({count},), got {tags.shape}")
+    if count == 0:
+        return np.zeros(0, np.int64)
+    if tags.dtype.kind == "b" or not (np.issubdtype(tags.dtype, np.integer) or np.issubdtype(tags.dtype, np.floating)):
+        raise ValueError(f"facet_tags must be integers, got dtype {tags.dtype}")
+    if np.issubdtype(tags.dtype, np.floating):
+        bad = ~np.isfinite(tags) | (tags != np.round(tags)) | (np.abs(tags) >= 2.0 ** 63)
+        if np.any(bad):
+            i = int(np.argmax(bad))
+            raise ValueError(f"facet tag {i} is {tags[i]!r}: facet tags must be integers")
+    return tags.astype(np.int64)
+
+
+def _boundary_facets_as_given(cells: np.ndarray, cell_type: str, facets: np.ndarray) -> np.ndarray:
+    """The given facets, checked to be distinct boundary facets of the cells and returned in the
+    orientation of their cell (outward normal). A repeated facet would count twice in the lumped
+    boundary measure; an interior facet is no boundary at all."""
+    if len(facets) == 0:
+        return facets
+    key = np.sort(facets, axis=1)
+    _, first, count = np.unique(key, axis=0, return_index=True, return_counts=True)
+    if np.any(count > 1):
+        i = int(first[np.argmax(count > 1)])
+        raise ValueError(f"facet {i} ({facets[i].tolist()}) is given {int(count.max())} times: each boundary facet once")
+    bnd = boundary_facets(cells, cell_type)
+    bkey = np.sort(bnd, axis=1)
+    both = np.concatenate([bkey, key])
+    _, inverse = np.unique(both, axis=0, return_inverse=True)
+    inverse = inverse.ravel()
+    row_of = np.full(len(bnd) + len(facets), -1, np.int64)
+    row_of[inverse[:len(bnd)]] = np.arange(len(bnd))
+    rows = row_of[inverse[len(bnd):]]
+    if np.any(rows < 0):
+        i = int(np.argmax(rows < 0))
+        raise ValueError(f"facet {i} ({facets[i].tolist()}) is not a boundary facet of the cells "
+                         "(an interior facet, or nodes that form no facet of any cell)")
+    return bnd[rows]
 
 
 @dataclass
@@ -96,16 +217,17 @@ class Mesh:
             facets = np.zeros((0, kf), np.int64)
         if facets.ndim != 2 or facets.shape[1] != kf:
             raise ValueError(f"facets of {self.cell_type} meshes must have shape (f, {kf}), got {facets.shape}")
+        if facets.size and not np.issubdtype(facets.dtype, np.integer):
+            raise ValueError("facets must hold integer node indices")
         facets = facets.astype(np.int64)
         if np.any((facets < 0) | (facets >= len(pts))):
             raise ValueError("a facet refers to a node out of range")
-        tags = np.asarray(self.facet_tags)
-        if tags.shape != (len(facets),):
-            raise ValueError(f"facet_tags must have shape ({len(facets)},), got {tags.shape}")
+        tags = _integer_tags(self.facet_tags, len(facets))
+        facets = _boundary_facets_as_given(cells, self.cell_type, facets)
         self.points = np.ascontiguousarray(pts)
         self.cells = np.ascontiguousarray(cells)
         self.facets = np.ascontiguousarray(facets)
-        self.facet_tags = np.ascontiguousarray(tags.astype(np.int64))
+        self.facet_tags = np.ascontiguousarray(tags)
 
     def _orient(self, pts, cells):
         X = pts[cells]
@@ -127,6 +249,7 @@ class Mesh:
                 if np.any(bad):
                     raise ValueError(f"cell {int(np.argmax(bad))} (quad) is not convex or intersects itself")
             _check_not_folded(cells)
+            _check_no_overlap_2d(pts, cells)
         elif self.cell_type == "tetra":
             vol = _tet_volume(X)
             small = np.abs(vol) <= 1e-12 * h ** 3
@@ -141,6 +264,7 @@ class Mesh:
             vol = sum(_tet_volume(X[:, list(t)]) for t in split)
             if np.any(vol <= 1e-12 * h ** 3):
                 raise ValueError(f"cell {int(np.argmax(vol <= 1e-12 * h ** 3))} (hexahedron) is inverted or degenerate")
+        _check_manifold(cells, self.cell_type)
         return cells
 
     # -- construction ---------------------------------------------------------------------------

@@ -1,13 +1,19 @@
 """Rigid obstacles: each gives, per contact node, the outward normal n (towards the obstacle) and
 the gap g measured along n in the reference configuration. g >= 0 is the normal case; a negative gap
 is an initial penetration, and it has a defined meaning: the constraint u_n <= g pushes the node
-back out onto the obstacle surface (the solution has u_n = g < 0 there and a compressive force)."""
+back out onto the obstacle surface (the solution has u_n = g < 0 there and a compressive force).
+
+An obstacle is any object with gaps_and_normals(points) -> (gaps (m,), normals (m, d)) for the
+contact nodes' coordinates; one that also has gaps_and_normals_at(nodes, points) is asked with the
+contact nodes' mesh ids as well (NodalObstacle)."""
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Tuple
+from typing import Optional, Sequence, Tuple
 
 import numpy as np
+
+from .nodal import node_ids, rows_for
 
 
 @dataclass(frozen=True)
@@ -32,17 +38,36 @@ class PlaneObstacle:
 
 @dataclass(frozen=True)
 class NodalObstacle:
-    """Any obstacle, given per contact node as gap and normal (curved obstacles, 3D)."""
+    """Any obstacle, given per node as gap and normal (curved obstacles, 3D). With `nodes` (mesh
+    node ids of the finest mesh, one per row of gaps and normals, covering every contact node; more
+    nodes are fine) the values are looked up by node id. Without it the rows follow the order of
+    the contact nodes: ascending node id among the nodes of the contact facets that stay contact
+    nodes (problem.contact.nodes)."""
 
     gaps: np.ndarray
     normals: np.ndarray
+    nodes: Optional[Sequence[int]] = None
+
+    def gaps_and_normals_at(self, nodes: np.ndarray, x: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
+        if self.nodes is None:
+            return self.gaps_and_normals(x)
+        given = node_ids(self.nodes, "NodalObstacle nodes")
+        g = np.asarray(self.gaps, dtype=float)
+        n = np.asarray(self.normals, dtype=float)
+        if g.shape != given.shape or n.shape != (len(given), x.shape[1]):
+            raise ValueError(f"NodalObstacle with {len(given)} node ids needs gaps of shape {given.shape} and normals "
+                             f"of shape {(len(given), x.shape[1])}, got {g.shape} and {n.shape}")
+        rows = rows_for(given, np.asarray(nodes), "NodalObstacle")
+        return NodalObstacle(g[rows], n[rows]).gaps_and_normals(x)
 
     def gaps_and_normals(self, x: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
+        if self.nodes is not None:
+            raise ValueError("a NodalObstacle with node ids is evaluated through gaps_and_normals_at(nodes, points)")
         g = np.asarray(self.gaps, dtype=float)
         n = np.asarray(self.normals, dtype=float)
         if g.shape != (len(x),) or n.shape != x.shape:
             raise ValueError(f"NodalObstacle needs gaps of shape {(len(x),)} and normals of shape {x.shape}, "
-                             f"got {g.shape} and {n.shape}")
+                             f"got {g.shape} and {n.shape} (or give their mesh node ids as nodes=)")
         if not (np.all(np.isfinite(g)) and np.all(np.isfinite(n))):
             raise ValueError("NodalObstacle gaps and normals must be finite")
         length = np.linalg.norm(n, axis=1)

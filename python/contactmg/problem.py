@@ -2,16 +2,20 @@
 boundary against a rigid obstacle with a friction law, and the solvers on top of it."""
 from __future__ import annotations
 
+import numbers
 import time
+import warnings
 from dataclasses import dataclass
 from typing import Callable, Dict, Optional, Sequence, Union
 
 import numpy as np
 
 from . import _core
+from .frames import contact_frames, to_canonical, to_local
 from .friction import Coulomb, Frictionless, Tresca
 from .hierarchy import MeshHierarchy
 from .material import Material
+from .mesh import connected_components
 from .results import ContactResult
 
 VectorField = Union[Sequence[float], np.ndarray, Callable[[np.ndarray], np.ndarray]]
@@ -20,25 +24,56 @@ METHODS = ("nmg", "fixed-point", "linear")
 CYCLES = ("V", "W", "F")
 
 
+INT32_MAX = 2 ** 31 - 1  # the core counts cycles in a C int
+
+
+def tag_tuple(tags, name: str) -> tuple:
+    """Facet tags as a tuple of ints: one integer, or a sequence of integers."""
+    if isinstance(tags, (bool, np.bool_)) or isinstance(tags, (str, bytes)):
+        raise TypeError(f"{name} must be an integer tag or a sequence of integer tags, got {tags!r}")
+    if isinstance(tags, (int, np.integer)):
+        return (int(tags),)
+    try:
+        items = list(tags)
+    except TypeError:
+        raise TypeError(f"{name} must be an integer tag or a sequence of integer tags, got {tags!r}") from None
+    out = []
+    for t in items:
+        if isinstance(t, (bool, np.bool_)) or not isinstance(t, (int, np.integer)):
+            raise TypeError(f"{name} must hold integer tags, got {t!r}")
+        out.append(int(t))
+    return tuple(out)
+
+
 @dataclass(frozen=True)
 class Dirichlet:
-    """Prescribed displacement on the nodes of the boundary facets with the given tags: a constant
-    vector (a component given as None stays free) or a callable x (m, d) -> (m, d) values, which
-    fixes every component."""
+    """Prescribed displacement on the nodes of the boundary facets with the given tags (one
+    integer or a sequence): a constant vector (a component given as None stays free) or a callable
+    x (m, d) -> (m, d) values, which fixes every component."""
 
     tags: Sequence[int]
     value: Union[Sequence[Optional[float]], Callable[[np.ndarray], np.ndarray]]
 
+    def __post_init__(self):
+        object.__setattr__(self, "tags", tag_tuple(self.tags, "Dirichlet tags"))
+
 
 @dataclass
 class ContactBoundary:
-    """Contact nodes of the finest mesh with their outward normals, gaps, lumped boundary measure
-    (integral of the hat function over the contact boundary) and friction data."""
+    """Contact nodes of the finest mesh (ascending node id) with their outward normals, gaps,
+    lumped boundary measure (integral of the hat function over the contact boundary), frames
+    (nc, d, d; columns n, t(, s)) and the contact facets they come from."""
 
     nodes: np.ndarray
     normals: np.ndarray
     gaps: np.ndarray
     measure: np.ndarray
+    frames: Optional[np.ndarray] = None
+    facets: Optional[np.ndarray] = None
+
+    def __post_init__(self):
+        if self.frames is None:
+            self.frames = contact_frames(self.normals)
 
 
 def _field(value: Optional[VectorField], x: np.ndarray, name: str) -> np.ndarray:
@@ -54,10 +89,37 @@ def _field(value: Optional[VectorField], x: np.ndarray, name: str) -> np.ndarray
     return np.ascontiguousarray(v)
 
 
+def _count(v, name: str, lo: int, hi: int) -> int:
+    if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, np.integer)) or not lo <= v <= hi:
+        raise ValueError(f"{name} must be an integer in {lo}..{hi}, got {v!r}")
+    return int(v)
+
+
+@dataclass(frozen=True)
+class CycleOptions:
+    """The multigrid cycle of a solve: type V/W/F and nu1 pre-, nu2 post-smoothing sweeps."""
+
+    cycle: str = "F"
+    nu1: int = 3
+    nu2: int = 3
+
+    def __post_init__(self):
+        if self.cycle not in CYCLES:
+            raise ValueError(f"cycle must be one of {CYCLES}, got {self.cycle!r}")
+        object.__setattr__(self, "nu1", _count(self.nu1, "nu1", 0, 100))
+        object.__setattr__(self, "nu2", _count(self.nu2, "nu2", 0, 100))
+        if self.nu1 + self.nu2 < 1:
+            raise ValueError("nu1 + nu2 must be at least 1: a cycle needs smoothing")
+
+
 class ContactProblem:
     """Linear elasticity on the finest level of `hierarchy` with contact on the facets tagged
     `contact_tags` against `obstacle` under `friction`. Without contact tags it is a linear
-    elasticity problem solved by linear multigrid."""
+    elasticity problem solved by linear multigrid.
+
+    The problem is the description (body, boundary conditions, contact boundary, obstacle, law),
+    assembled once. The solver options go to solve(); cycle, nu1 and nu2 given here are only the
+    defaults of solve()."""
 
     def __init__(self, hierarchy: MeshHierarchy, material: Material, dirichlet: Sequence[Dirichlet],
                  contact_tags: Sequence[int] = (), obstacle=None, friction=None,
@@ -67,36 +129,34 @@ class ContactProblem:
             raise TypeError("hierarchy must be a MeshHierarchy")
         if not isinstance(material, Material):
             raise TypeError("material must be a Material")
-        if cycle not in CYCLES:
-            raise ValueError(f"cycle must be one of {CYCLES}, got {cycle!r}")
+        self.default_cycle = CycleOptions(cycle, nu1, nu2)
         friction = Frictionless() if friction is None else friction
         if not isinstance(friction, (Frictionless, Tresca, Coulomb)):
             raise TypeError("friction must be Frictionless(), Tresca(bound) or Coulomb(F)")
+        contact_tags = tag_tuple(contact_tags, "contact_tags")
         if len(contact_tags) and obstacle is None:
             raise ValueError("contact_tags are given but no obstacle")
         if obstacle is not None and not callable(getattr(obstacle, "gaps_and_normals", None)):
             raise TypeError("obstacle must be a PlaneObstacle, a NodalObstacle or an object with "
                             f"gaps_and_normals(points), got {type(obstacle).__name__}")
+        if isinstance(dirichlet, Dirichlet):
+            dirichlet = [dirichlet]
         for bc in dirichlet:
             if not isinstance(bc, Dirichlet):
                 raise TypeError(f"dirichlet must be a sequence of Dirichlet(tags, value), got a {type(bc).__name__}")
-            if not callable(bc.value) and (np.ndim(bc.value) != 1 or isinstance(bc.value, str)):
+            if not callable(bc.value) and (np.ndim(bc.value) != 1 or isinstance(bc.value, (str, bytes))):
                 raise TypeError("a Dirichlet value must be a vector (None for a free component) or a callable, "
                                 f"got {bc.value!r}")
-        for name, nu in (("nu1", nu1), ("nu2", nu2)):
-            if isinstance(nu, bool) or not isinstance(nu, (int, np.integer)) or not 0 <= nu <= 100:
-                raise ValueError(f"{name} must be an integer in 0..100, got {nu!r}")
-        if nu1 + nu2 < 1:
-            raise ValueError("nu1 + nu2 must be at least 1: a cycle needs smoothing")
         t0 = time.perf_counter()
         self.hierarchy, self.material, self.friction = hierarchy, material, friction
-        self.cycle, self.nu1, self.nu2 = cycle, nu1, nu2
+        self.benchmark: Optional[str] = None  # "hertz" for the Hertz benchmark (its zones are centred on x = 0)
         mesh = self.mesh = hierarchy.finest
         d, n = mesh.dim, mesh.num_points
         self.A = _core.assemble_elasticity(mesh.points, mesh.cells, mesh.cell_type, material.E, material.nu)
         self.load = _core.assemble_mass_load(mesh.points, mesh.cells, mesh.cell_type,
                                              _field(body_force, mesh.points, "body_force"))
         for tag, value in (traction or {}).items():
+            (tag,) = tag_tuple(tag, "a traction tag")
             sel = mesh.facet_tags == tag
             if not np.any(sel):
                 raise ValueError(f"no boundary facet carries the traction tag {tag}")
@@ -116,117 +176,182 @@ class ContactProblem:
                 raise ValueError(f"a Dirichlet value needs {d} components (None for free), got {len(bc.value)}")
             for a, v in enumerate(bc.value):
                 if v is not None:
-                    if not np.isfinite(v):
-                        raise ValueError("Dirichlet values must be finite")
+                    if isinstance(v, (bool, np.bool_)) or not isinstance(v, numbers.Real) or not np.isfinite(v):
+                        raise ValueError(f"Dirichlet values must be finite numbers (None for free), got {v!r}")
                     self.fixed[nodes, a] = 1
                     self.fixed_values[nodes, a] = v
         self._check_rigid_motion()
         self.contact = self._contact_boundary(contact_tags, obstacle)
-        self.coefficients = friction.coefficients(len(self.contact.nodes), self.contact.measure)
-        self._solver = None
-        self._solver_build_seconds = 0.0
-        self.setup_seconds = time.perf_counter() - t0 + hierarchy.build_seconds
+        self.coefficients = friction.coefficients(self.contact.nodes, self.contact.measure)
+        self._solvers: Dict[CycleOptions, object] = {}
+        self._build_seconds: Dict[CycleOptions, float] = {}
+        self.assembly_seconds = time.perf_counter() - t0 + hierarchy.build_seconds
+
+    # -- compatibility: the defaults of solve() ---------------------------------------------------
+    @property
+    def cycle(self) -> str:
+        return self.default_cycle.cycle
+
+    @property
+    def nu1(self) -> int:
+        return self.default_cycle.nu1
+
+    @property
+    def nu2(self) -> int:
+        return self.default_cycle.nu2
+
+    @property
+    def setup_seconds(self) -> float:
+        """Hierarchy, assembly and the build of the core solver of the default cycle (once built)."""
+        return self.assembly_seconds + self._build_seconds.get(self.default_cycle, 0.0)
 
     # -- setup helpers --------------------------------------------------------------------------
     def _check_rigid_motion(self):
-        """The Dirichlet dofs must pin every rigid-body motion of the body (no contact relied on)."""
-        x = self.mesh.points
-        d = self.mesh.dim
-        x = x - x.mean(axis=0)
-        modes = [np.eye(d)[a][None, :].repeat(len(x), 0) for a in range(d)]
-        pairs = [(0, 1)] if d == 2 else [(0, 1), (1, 2), (0, 2)]
-        for i, j in pairs:
-            r = np.zeros_like(x)
-            r[:, i], r[:, j] = -x[:, j], x[:, i]
-            modes.append(r)
-        R = np.stack([m[self.fixed.astype(bool)] for m in modes], axis=1)
-        if R.size == 0 or np.linalg.matrix_rank(R, tol=1e-10 * max(1.0, np.abs(R).max())) < len(modes):
-            raise ValueError("the Dirichlet conditions leave rigid-body motion free: "
-                             "fix enough displacement components to hold the body")
+        """The Dirichlet dofs must pin every rigid-body motion of every connected piece of the body
+        (no contact relied on): a piece that floats free makes the problem singular."""
+        mesh = self.mesh
+        x, d = mesh.points, mesh.dim
+        fixed = self.fixed.astype(bool)
+        count, label = connected_components(mesh.cells, mesh.num_points)
+        order = np.argsort(label, kind="stable")
+        bounds = np.searchsorted(label[order], np.arange(count + 1))
+        for k in range(count):
+            nodes = np.sort(order[bounds[k]:bounds[k + 1]])
+            if _holds_rigid_motion(x[nodes], fixed[nodes]):
+                continue
+            where = "" if count == 1 else (
+                f" of piece {k + 1} of the {count} disconnected pieces of the mesh ({len(nodes)} nodes, "
+                f"node {int(nodes[0])} at {np.round(x[nodes[0]], 6).tolist()})")
+            raise ValueError(f"the Dirichlet conditions leave rigid-body motion{where} free: "
+                             "fix enough displacement components to hold " + ("the body" if count == 1 else "every piece"))
 
     def _contact_boundary(self, tags, obstacle) -> ContactBoundary:
         mesh, d = self.mesh, self.mesh.dim
         if not len(tags):
-            return ContactBoundary(np.zeros(0, np.int64), np.zeros((0, d)), np.zeros(0), np.zeros(0))
+            return ContactBoundary(np.zeros(0, np.int64), np.zeros((0, d)), np.zeros(0), np.zeros(0),
+                                   facets=np.zeros((0, mesh.facets.shape[1]), np.int64))
         sel = np.isin(mesh.facet_tags, list(tags))
         if not np.any(sel):
             raise ValueError(f"no boundary facet carries the contact tags {list(tags)}")
-        nodes = np.unique(mesh.facets[sel])
+        facets = mesh.facets[sel]
+        nodes = np.unique(facets)
         # Dirichlet wins where both apply (e.g. the ends of the Hertz arc on the clamped top edge)
         nodes = nodes[~self.fixed[nodes].any(axis=1)]
+        if len(nodes) == 0:
+            raise ValueError(f"the contact boundary is empty: every node of the facets tagged {list(tags)} is fixed by "
+                             "Dirichlet data (are the contact tags the Dirichlet tags?)")
         ones = np.ones((mesh.num_points, 1))
-        measure = _core.assemble_facet_load(mesh.points, mesh.facets[sel], ones)[nodes, 0]
-        gaps, normals = obstacle.gaps_and_normals(mesh.points[nodes])
-        return ContactBoundary(nodes.astype(np.int64), np.ascontiguousarray(normals), np.ascontiguousarray(gaps), measure)
-
-    def _make_solver(self, law: str, fixed=None, fixed_values=None, load=None):
-        d = self.mesh.dim
-        cls = _core.ContactSolver2D if d == 2 else _core.ContactSolver3D
-        c = self.contact
-        return cls(self.A, self.load if load is None else load, self.fixed if fixed is None else fixed,
-                   self.fixed_values if fixed_values is None else fixed_values, c.nodes, c.normals, c.gaps,
-                   self.coefficients, law, [t.as_tuple() for t in self.hierarchy.transfers], self.cycle,
-                   self.nu1, self.nu2)
+        measure = _core.assemble_facet_load(mesh.points, facets, ones)[nodes, 0]
+        at_nodes = getattr(obstacle, "gaps_and_normals_at", None)
+        x = mesh.points[nodes]
+        gaps, normals = at_nodes(nodes, x) if callable(at_nodes) else obstacle.gaps_and_normals(x)
+        gaps, normals = np.asarray(gaps, dtype=float), np.asarray(normals, dtype=float)
+        if gaps.shape != (len(nodes),) or normals.shape != (len(nodes), d):
+            raise ValueError(f"the obstacle gave gaps of shape {gaps.shape} and normals of shape {normals.shape} "
+                             f"for {len(nodes)} contact nodes")
+        if not (np.all(np.isfinite(gaps)) and np.all(np.isfinite(normals))):
+            raise ValueError("the obstacle gave non-finite gaps or normals")
+        if np.all(gaps < 0):
+            warnings.warn(f"every contact node starts inside the obstacle (gaps from {gaps.min():.3g} to {gaps.max():.3g}): "
+                          "is the obstacle normal flipped? It must point from the body into the obstacle", UserWarning,
+                          stacklevel=3)
+        return ContactBoundary(nodes.astype(np.int64), np.ascontiguousarray(normals), np.ascontiguousarray(gaps),
+                               measure, facets=np.ascontiguousarray(facets))
 
     @property
     def law(self) -> str:
         return "linear" if len(self.contact.nodes) == 0 else self.friction.law
 
+    def _new_core_solver(self, law: str, options: CycleOptions, fixed=None, fixed_values=None, load=None):
+        """A core solver of this problem's matrix and data (building one does not re-assemble)."""
+        # Switch point for the core redesign: once the core takes cycle/nu1/nu2 per solve, one
+        # solver serves every CycleOptions and `options` moves to the solve call.
+        d = self.mesh.dim
+        cls = _core.ContactSolver2D if d == 2 else _core.ContactSolver3D
+        c = self.contact
+        return cls(self.A, self.load if load is None else load, self.fixed if fixed is None else fixed,
+                   self.fixed_values if fixed_values is None else fixed_values, c.nodes, c.normals, c.gaps,
+                   self.coefficients, law, [t.as_tuple() for t in self.hierarchy.transfers], options.cycle,
+                   options.nu1, options.nu2)
+
+    def core_solver(self, cycle: Optional[str] = None, nu1: Optional[int] = None, nu2: Optional[int] = None):
+        """The core solver for the cycle options (defaults: the problem's), built on first use and
+        kept: one per (cycle, nu1, nu2)."""
+        options = self._options(cycle, nu1, nu2)
+        if options not in self._solvers:
+            t0 = time.perf_counter()
+            self._solvers[options] = self._new_core_solver(self.law, options)
+            self._build_seconds[options] = time.perf_counter() - t0
+        return self._solvers[options]
+
     @property
     def solver(self):
-        if self._solver is None:
-            t0 = time.perf_counter()
-            self._solver = self._make_solver(self.law)
-            self._solver_build_seconds = time.perf_counter() - t0
-            self.setup_seconds += self._solver_build_seconds
-        return self._solver
+        """The core solver of the default cycle options."""
+        return self.core_solver()
+
+    def _options(self, cycle, nu1, nu2) -> CycleOptions:
+        base = self.default_cycle
+        return CycleOptions(base.cycle if cycle is None else cycle, base.nu1 if nu1 is None else nu1,
+                            base.nu2 if nu2 is None else nu2)
 
     # -- solving --------------------------------------------------------------------------------
     def solve(self, method: str = "nmg", tol: float = 1e-11, rtol: float = 0.0, max_cycles: int = 200,
               u0: Optional[np.ndarray] = None, reference: Optional[ContactResult] = None,
               fixed_point_tol: float = 1e-9, fixed_point_max: int = 100,
-              error_reference: Optional[np.ndarray] = None) -> ContactResult:
+              error_reference: Optional[np.ndarray] = None, cycle: Optional[str] = None,
+              nu1: Optional[int] = None, nu2: Optional[int] = None) -> ContactResult:
         """Solve with `method`: "nmg" (Algorithm 2 for Coulomb; truncated monotone multigrid for
         frictionless and Tresca; linear multigrid without contact), "fixed-point" (Algorithm 1,
         Coulomb only) or "linear" (the cost reference: the linear problem with the contact state of
         `reference` — or of an nmg solve made first — known in advance, started from zero).
-        With `error_reference` (a displacement u*), history["error"] records ||u - u*||_A after
-        every cycle (one extra matrix product per cycle, kept out of the timings)."""
+        cycle ("V", "W", "F"), nu1 and nu2 (pre- and post-smoothing sweeps) default to the
+        problem's; changing them re-uses the assembled problem (a core solver is built once per
+        choice). With `error_reference` (a displacement u*), history["error"] records ||u - u*||_A
+        after every cycle (one extra matrix product per cycle, kept out of the timings).
+        A progress callback is not offered yet: the core runs all cycles in one call."""
         if method not in METHODS:
             raise ValueError(f"method must be one of {METHODS}, got {method!r}")
+        options = self._options(cycle, nu1, nu2)
         for name, v in (("tol", tol), ("rtol", rtol), ("fixed_point_tol", fixed_point_tol)):
-            if not (isinstance(v, (int, float)) and np.isfinite(v) and v >= 0):
+            if isinstance(v, (bool, np.bool_)) or not (isinstance(v, numbers.Real) and np.isfinite(v) and v >= 0):
                 raise ValueError(f"{name} must be a finite number >= 0, got {v!r}")
         if tol == 0 and rtol == 0:
             raise ValueError("one of tol and rtol must be positive")
         for name, v in (("max_cycles", max_cycles), ("fixed_point_max", fixed_point_max)):
-            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
-                raise ValueError(f"{name} must be a positive integer, got {v!r}")
-        kw = dict(tol=tol, rtol=rtol, max_cycles=int(max_cycles), fixed_point_tol=fixed_point_tol,
+            if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, np.integer)) or not 1 <= v <= INT32_MAX:
+                raise ValueError(f"{name} must be an integer in 1..{INT32_MAX}, got {v!r}")
+        kw = dict(tol=float(tol), rtol=float(rtol), max_cycles=int(max_cycles), fixed_point_tol=float(fixed_point_tol),
                   fixed_point_max=int(fixed_point_max), reference=error_reference)
         if method == "fixed-point":
             if not isinstance(self.friction, Coulomb) or self.law == "linear":
                 raise ValueError("the fixed-point method (Algorithm 1) needs Coulomb friction on a contact boundary")
-            raw = self.solver.solve(u0, fixed_point=True, **kw)
-        elif method == "nmg":
-            raw = self.solver.solve(u0, **kw)
-        else:
-            if reference is None:
-                reference = self.solve("nmg", tol=tol, rtol=rtol, max_cycles=max_cycles)
-            t0 = time.perf_counter()
-            solver = self._known_state_solver(reference)
-            build = time.perf_counter() - t0
-            raw = solver.solve(None, **kw)
-            raw["contact_force"], raw["friction_bound"], raw["state"] = self._contact_outputs_linear(raw, reference)
-            res = ContactResult.from_raw(self, raw, method)
-            # building its hierarchy for the known state is setup, like the nmg solver's own build
-            res.setup_seconds = self.setup_seconds - self._solver_build_seconds + build
-            res.extra["reference"] = {"method": reference.method, "cycles": reference.cycles,
-                                      "solve_seconds": reference.solve_seconds, "converged": reference.converged}
-            return res
-        return ContactResult.from_raw(self, raw, method)
+            solver = self.core_solver(options.cycle, options.nu1, options.nu2)
+            return self._result(solver.solve(u0, fixed_point=True, **kw), method, options)
+        if method == "nmg":
+            solver = self.core_solver(options.cycle, options.nu1, options.nu2)
+            return self._result(solver.solve(u0, **kw), method, options)
+        if reference is None:
+            reference = self.solve("nmg", tol=tol, rtol=rtol, max_cycles=max_cycles, cycle=options.cycle,
+                                   nu1=options.nu1, nu2=options.nu2)
+        t0 = time.perf_counter()
+        solver = self._known_state_solver(reference, options)
+        build = time.perf_counter() - t0
+        raw = solver.solve(None, **kw)
+        raw["contact_force"], raw["friction_bound"], raw["state"] = self._contact_outputs_linear(raw, reference)
+        res = self._result(raw, method, options)
+        # building its hierarchy for the known state is setup, like the nmg solver's own build
+        res.setup_seconds = self.assembly_seconds + build
+        res.extra["reference"] = {"method": reference.method, "cycles": reference.cycles,
+                                  "solve_seconds": reference.solve_seconds, "converged": reference.converged}
+        return res
 
-    def _known_state_solver(self, ref: ContactResult):
+    def _result(self, raw: dict, method: str, options: CycleOptions) -> ContactResult:
+        res = ContactResult.from_raw(self, raw, method)
+        res.setup_seconds = self.assembly_seconds + self._build_seconds.get(options, 0.0)
+        res.extra["cycle_options"] = {"cycle": options.cycle, "nu1": options.nu1, "nu2": options.nu2}
+        return res
+
+    def _known_state_solver(self, ref: ContactResult, options: CycleOptions):
         """Linear problem with the final contact state of `ref`: active normals fixed on the gap,
         sticking tangentials fixed at zero, sliding nodes loaded with their friction force."""
         c = self.contact
@@ -239,35 +364,31 @@ class ContactProblem:
         fixed[c.nodes[stick], 1:] = 1
         values[c.nodes[stick], 1:] = 0.0
         slip = state == 2
-        frames = _frames(c.normals)
         s_local = np.zeros_like(ref.contact_force)
         s_local[slip, 1:] = ref.contact_force[slip, 1:]
-        load[c.nodes] += np.einsum("cij,cj->ci", frames, s_local)
-        return self._make_solver("linear", fixed, values, load)
+        load[c.nodes] += to_canonical(c.frames, s_local)
+        return self._new_core_solver("linear", options, fixed, values, load)
 
     def _contact_outputs_linear(self, raw, ref):
-        # the linear reference knows no contact law; report the contact forces it produced
-        frames = _frames(self.contact.normals)
-        u = raw["u"]
-        f = self.A.matvec(u) - self.load
-        cf = np.einsum("cji,cj->ci", frames, f[self.contact.nodes])
+        # The core reports A u - f of its own problem, whose load carries the sliding nodes'
+        # friction forces and whose fixed dofs are eliminated; the contact force is A u - f of
+        # this problem.
+        f = self.A.matvec(raw["u"]) - self.load
+        cf = to_local(self.contact.frames, f[self.contact.nodes])
         return cf, ref.friction_bound.copy(), ref.node_state[self.contact.nodes].copy()
 
 
-def _frames(normals: np.ndarray) -> np.ndarray:
-    """The frames Q = [n, t(, s)] of the core (columns), for given unit normals."""
-    nc, d = normals.shape
-    Q = np.zeros((nc, d, d))
-    n = normals / np.linalg.norm(normals, axis=1)[:, None] if nc else normals
-    Q[:, :, 0] = n
-    if d == 2:
-        Q[:, 0, 1], Q[:, 1, 1] = -n[:, 1], n[:, 0]
-    else:
-        for c in range(nc):
-            k = int(np.argmin(np.abs(n[c])))
-            e = np.zeros(3)
-            e[k] = 1
-            t = np.cross(n[c], e)
-            t /= np.linalg.norm(t)
-            Q[c, :, 1], Q[c, :, 2] = t, np.cross(n[c], t)
-    return Q
+def _holds_rigid_motion(x: np.ndarray, fixed: np.ndarray) -> bool:
+    """Do the fixed components `fixed` (m, d) of the nodes at `x` (m, d) pin every rigid motion?"""
+    d = x.shape[1]
+    if not fixed.any():
+        return False
+    x = x - x.mean(axis=0)
+    modes = [np.eye(d)[a][None, :].repeat(len(x), 0) for a in range(d)]
+    pairs = [(0, 1)] if d == 2 else [(0, 1), (1, 2), (0, 2)]
+    for i, j in pairs:
+        r = np.zeros_like(x)
+        r[:, i], r[:, j] = -x[:, j], x[:, i]
+        modes.append(r)
+    R = np.stack([m[fixed] for m in modes], axis=1)
+    return np.linalg.matrix_rank(R, tol=1e-10 * max(1.0, np.abs(R).max())) == len(modes)
