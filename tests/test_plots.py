@@ -57,7 +57,7 @@ def line_by_color(ax, color, ls="-"):
 
 def test_boundary_stress_lines_hold_the_sorted_stresses(hertz_f04):
     p, res, _ = hertz_f04
-    ax = plots.plot_boundary_stress(res, friction=0.4)
+    ax = plots.plot_boundary_stress(res, friction=0.4, margin=1.5)
     # independent selection: contact nodes within 1.5 x the largest |x| of a node in contact
     x = p.mesh.points[res.contact_nodes, 0]
     a = np.abs(x[res.contact_state > 0]).max()
@@ -83,7 +83,7 @@ def test_boundary_stress_lines_hold_the_sorted_stresses(hertz_f04):
 
 def test_boundary_stress_zones_cover_exactly_the_stick_and_slip_nodes(hertz_f04):
     _, res, _ = hertz_f04
-    ax = plots.plot_boundary_stress(res)  # F read off the result
+    ax = plots.plot_boundary_stress(res, margin=1.5)  # F read off the result
     assert "F = 0.4" in ax.get_title()
     x = res.mesh.points[res.contact_nodes, 0]
     shown = np.abs(x) <= 1.5 * res.contact_halfwidth

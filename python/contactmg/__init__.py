@@ -1,19 +1,21 @@
 """contactmg: nonlinear monotone multigrid for elastic contact with Coulomb friction."""
 from . import _core  # noqa: F401
 from .friction import Coulomb, Frictionless, Tresca
-from .generators import (HERTZ_ARC, HERTZ_TOP, CircleProjector, hertz_half_disk, hertz_projector, layer,
-                         rectangle)
+from .frames import contact_frames
+from .generators import (HERTZ_ARC, HERTZ_TOP, RECT_BOTTOM, RECT_LEFT, RECT_RIGHT, RECT_TOP, CircleProjector,
+                         hertz_half_disk, hertz_projector, rectangle)
 from .hierarchy import MeshHierarchy, Transfer
 from .io import read_mesh, to_meshio, write_mesh
 from .material import Material
 from .mesh import Mesh
 from .obstacle import NodalObstacle, PlaneObstacle
-from .problem import ContactBoundary, ContactProblem, Dirichlet
+from .problem import ContactBoundary, ContactProblem, CycleOptions, Dirichlet
 from .results import ContactResult
 
 __version__ = "0.1.0"
 
-__all__ = ["Coulomb", "Frictionless", "Tresca", "HERTZ_ARC", "HERTZ_TOP", "CircleProjector", "hertz_half_disk",
-           "hertz_projector", "layer", "rectangle", "MeshHierarchy", "Transfer", "read_mesh", "to_meshio",
-           "write_mesh", "Material", "Mesh", "NodalObstacle", "PlaneObstacle", "ContactBoundary", "ContactProblem",
-           "Dirichlet", "ContactResult"]
+__all__ = ["Coulomb", "Frictionless", "Tresca", "contact_frames", "HERTZ_ARC", "HERTZ_TOP", "RECT_BOTTOM",
+           "RECT_LEFT", "RECT_RIGHT", "RECT_TOP", "CircleProjector", "hertz_half_disk", "hertz_projector",
+           "rectangle", "MeshHierarchy", "Transfer", "read_mesh", "to_meshio", "write_mesh", "Material", "Mesh",
+           "NodalObstacle", "PlaneObstacle", "ContactBoundary", "ContactProblem", "CycleOptions", "Dirichlet",
+           "ContactResult"]

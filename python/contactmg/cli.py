@@ -11,6 +11,7 @@ from typing import List, Optional
 
 EXIT_OK, EXIT_BAD_INPUT, EXIT_NO_CONVERGENCE = 0, 2, 3
 MAX_LEVELS = 12
+MAX_CYCLES = 2 ** 31 - 1  # the core counts cycles in a C int
 PLOT_SUFFIXES = (".png", ".pdf", ".svg")
 
 
@@ -39,8 +40,11 @@ def _nonneg_float(name, positive=False):
 
 
 def _writable(path: str) -> str:
+    """A path an output can be written to ("-": standard output), checked before any work."""
     if path == "-":
         return path
+    if not path.strip():
+        raise argparse.ArgumentTypeError("an output path is empty")
     d = os.path.dirname(os.path.abspath(path))
     if not os.path.isdir(d):
         raise argparse.ArgumentTypeError(f"cannot write {path}: directory {d} does not exist")
@@ -52,9 +56,12 @@ def _writable(path: str) -> str:
 
 
 def _with_suffix(kind: str, suffixes):
+    """A writable file path with one of the suffixes (a format that needs a file: no "-")."""
     def parse(path: str) -> str:
+        if path == "-" or not path.strip():
+            raise argparse.ArgumentTypeError(f"{kind} needs a file path ending in {', '.join(suffixes)}, got {path!r}")
         path = _writable(path)
-        if path != "-" and not path.lower().endswith(tuple(suffixes)):
+        if not path.lower().endswith(tuple(suffixes)):
             raise argparse.ArgumentTypeError(f"{kind} {path}: unknown format (use {', '.join(suffixes)})")
         return path
     return parse
@@ -70,7 +77,7 @@ def _parser() -> argparse.ArgumentParser:
     h.add_argument("--friction", type=_nonneg_float("--friction"), default=0.4)
     h.add_argument("--method", choices=["nmg", "fixed-point", "linear"], default="nmg")
     h.add_argument("--tol", type=_nonneg_float("--tol", positive=True), default=1e-11)
-    h.add_argument("--max-cycles", type=_positive_int("--max-cycles"), default=200)
+    h.add_argument("--max-cycles", type=_positive_int("--max-cycles", 1, MAX_CYCLES), default=200)
     h.add_argument("--cycle", choices=["V", "W", "F"], default="F")
     h.add_argument("--nu1", type=_positive_int("--nu1", 0, 100), default=3)
     h.add_argument("--nu2", type=_positive_int("--nu2", 0, 100), default=3)
@@ -152,7 +159,7 @@ def run_hertz(args) -> int:
         import matplotlib.pyplot as plt
 
         fig, ax = plt.subplots(figsize=(7, 4))
-        plot_boundary_stress(result, ax=ax, friction=args.friction)
+        plot_boundary_stress(result, ax=ax, friction=args.friction, margin=1.5)
         fig.tight_layout()
         fig.savefig(args.plot, dpi=150)
         plt.close(fig)

@@ -190,7 +190,3 @@ def rectangle(nx: int, ny: int, lx: float = 1.0, ly: float = 1.0, cell: str = "t
 
     return Mesh.from_cells(pts, cells, cell, tagger)
 
-
-def layer(nx: int, ny: int, width: float, height: float, cell: str = "triangle") -> Mesh:
-    """A layer [0, width] x [0, height]; its bottom (RECT_BOTTOM) is the contact face."""
-    return rectangle(nx, ny, width, height, cell)

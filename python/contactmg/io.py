@@ -13,6 +13,13 @@ _TAG_KEYS = ("gmsh:physical", "tag", "tags", "cell_tags", "medit:ref")
 _FACET_TYPE = {"triangle": "line", "quad": "line", "tetra": "triangle", "hexahedron": "quad"}
 _UNSUPPORTED_2D = {"triangle6", "triangle7", "quad8", "quad9", "polygon"}
 _UNSUPPORTED_3D = {"tetra10", "hexahedron20", "hexahedron27", "wedge", "pyramid", "wedge15", "pyramid13"}
+# Formats that keep what write_mesh hands over (cells, tagged facets, point data), by extension.
+# meshio reads ".msh" as ANSYS or Gmsh; here it is Gmsh. Surface formats (.stl, .obj, ...) would
+# drop the cells or the data without a word: refused.
+WRITE_FORMATS = {".vtu": "vtu", ".vtk": "vtk", ".msh": "gmsh22", ".xdmf": "xdmf", ".xmf": "xdmf"}
+# Coordinates beyond the mesh's dimension that are zero up to this (relative to the extent) are
+# round-off of a planar mesh, not a third dimension.
+PLANAR_TOL = 1e-12
 
 
 def read_mesh(source: Union[str, os.PathLike, meshio.Mesh], dim: Optional[int] = None) -> Mesh:
@@ -44,8 +51,11 @@ def read_mesh(source: Union[str, os.PathLike, meshio.Mesh], dim: Optional[int] =
     d = CELL_DIM[cell_type] if dim is None else dim
     pts = np.asarray(m.points, dtype=float)
     if pts.shape[1] > d:
-        if np.any(np.abs(pts[:, d:]) > 0):
-            raise ValueError(f"{cell_type} mesh has non-zero coordinates beyond dimension {d}")
+        extent = float(np.abs(pts[:, :d] - pts[:, :d].min(axis=0)).max(initial=0.0)) if len(pts) else 0.0
+        off = float(np.abs(pts[:, d:]).max(initial=0.0))
+        if not off <= PLANAR_TOL * max(extent, 1e-300):
+            raise ValueError(f"{cell_type} mesh has non-zero coordinates beyond dimension {d} (up to {off:.3g}, "
+                             f"the mesh extent is {extent:.3g})")
         pts = pts[:, :d]
     cells = np.vstack([b.data for b in m.cells if b.type == cell_type]).astype(np.int64)
     tmp = Mesh(pts, cells, cell_type, np.zeros((0, FACET_NODES[cell_type]), np.int64), np.zeros(0, np.int64))
@@ -89,14 +99,23 @@ def to_meshio(mesh: Mesh, point_data: Optional[Dict[str, np.ndarray]] = None,
 
 def write_mesh(path: Union[str, os.PathLike], mesh: Mesh, point_data: Optional[Dict[str, np.ndarray]] = None,
                **kwargs) -> None:
-    """Write through meshio (format from the extension)."""
+    """Write through meshio in the format the extension names: .vtu, .vtk, .msh (Gmsh 2.2),
+    .xdmf/.xmf; meshio's `file_format=` picks another format explicitly."""
     path = os.fspath(path)
+    ext = os.path.splitext(path)[1].lower()
+    if "file_format" not in kwargs:
+        if ext not in WRITE_FORMATS:
+            raise ValueError(f"cannot write {path}: {'unknown extension ' + repr(ext) if ext else 'no extension'} "
+                             f"(write_mesh writes {', '.join(WRITE_FORMATS)})")
+        kwargs["file_format"] = WRITE_FORMATS[ext]
     folder = os.path.dirname(os.path.abspath(path))
     if not os.path.isdir(folder):
         raise ValueError(f"cannot write {path}: directory {folder} does not exist")
     if not os.access(folder, os.W_OK):
         raise ValueError(f"cannot write {path}: directory {folder} is not writable")
     m = to_meshio(mesh, point_data)
+    if kwargs["file_format"].startswith("gmsh"):
+        m.cell_data["gmsh:geometrical"] = m.cell_data["gmsh:physical"]
     try:
         meshio.write(path, m, **kwargs)
     except (Exception, SystemExit) as e:

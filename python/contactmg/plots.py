@@ -62,28 +62,51 @@ def result_friction(result) -> Optional[float]:
     return float(np.median(result.friction_bound[sel] / sn[sel]))
 
 
-def boundary_stress_data(result, margin: float = 1.5) -> Dict[str, np.ndarray]:
-    """The data plot_boundary_stress draws: contact nodes with |x| <= margin * contact half-width
-    (all contact nodes when nothing is in contact), sorted by x, with their normal and tangential
-    stress and contact state."""
-    x = result.mesh.points[result.contact_nodes, 0]
-    width = result.contact_halfwidth
-    sel = np.abs(x) <= margin * width if width > 0 else np.ones(len(x), bool)
+_AXES = {"x": 0, "y": 1, "z": 2}
+
+
+def _position(result, along) -> tuple:
+    """(position of each contact node, axis label) for along = "x"/"y"/"z"/0/1/2 or "arc"."""
+    if along == "arc":
+        return result.arc_length(), "arc length along the contact boundary"
+    axis = _AXES.get(along, along)
+    if isinstance(axis, bool) or not isinstance(axis, (int, np.integer)) or not 0 <= axis < result.mesh.dim:
+        names = "/".join(list(_AXES)[:result.mesh.dim])
+        raise ValueError(f"along must be one of {names}, an axis 0..{result.mesh.dim - 1} or 'arc', got {along!r}")
+    return result.mesh.points[result.contact_nodes, int(axis)], "xyz"[int(axis)]
+
+
+def boundary_stress_data(result, margin: Optional[float] = None, along="x") -> Dict[str, np.ndarray]:
+    """The data plot_boundary_stress draws: the contact nodes sorted by their position `along` a
+    coordinate ("x", "y", "z" or an axis number) or the arc length of the 2D contact boundary
+    ("arc"), with their normal and tangential stress and contact state. Every contact node is
+    kept unless `margin` is given: then only the nodes with |x| <= margin * the contact half-width
+    (the Hertz view, zones centred on x = 0; all nodes when nothing is in contact)."""
+    x, label = _position(result, along)
+    sel = np.ones(len(x), bool)
+    if margin is not None:
+        axis = 0 if along == "arc" else int(_AXES.get(along, along))
+        width = result.halfwidth(axis=axis)
+        if width > 0:
+            sel = np.abs(result.mesh.points[result.contact_nodes, axis]) <= margin * width
     idx = np.flatnonzero(sel)
     idx = idx[np.argsort(x[idx], kind="stable")]
     return {"index": idx, "x": x[idx], "normal": result.normal_stress[idx],
             "tangential": result.tangential_stress[idx, 0], "state": result.contact_state[idx],
-            "bound": result.friction_bound[idx] / result.measure[idx]}
+            "bound": result.friction_bound[idx] / result.measure[idx], "label": label}
 
 
-def plot_boundary_stress(result, ax=None, friction: Optional[float] = None, margin: float = 1.5):
-    """Figure 2 (middle) of the paper: normal (blue) and tangential (red) boundary stress along x at
-    the contact nodes with |x| up to `margin` times the contact half-width, the Coulomb bound
-    +-F|sigma_n| dashed (F = `friction`, else the coefficient read off the result; for Tresca the
-    given bound), stick zones (green) and slip zones (orange) shaded. A shaded span reaches half-way
-    to the neighbouring nodes on either side."""
+def plot_boundary_stress(result, ax=None, friction: Optional[float] = None, margin: Optional[float] = None,
+                         along="x"):
+    """Figure 2 (middle) of the paper: normal (blue) and tangential (red) boundary stress at the
+    contact nodes against a coordinate or the arc length (`along`, see boundary_stress_data; every
+    node unless `margin` crops to |x| <= margin * the contact half-width, the paper's view of the
+    Hertz problem with margin=1.5), the Coulomb bound +-F|sigma_n| dashed (F = `friction`, else the
+    coefficient read off the result; for Tresca the given bound), stick zones (green) and slip
+    zones (orange) shaded. A shaded span reaches half-way to the neighbouring nodes on either
+    side. In 3D the first tangential component is drawn."""
     ax = _axes(ax, figsize=(7, 4))
-    data = boundary_stress_data(result, margin)
+    data = boundary_stress_data(result, margin, along)
     xs, sn, st, state = data["x"], data["normal"], data["tangential"], data["state"]
     for k, (lo, hi) in enumerate(_zones(xs, state == STICK)):
         ax.axvspan(lo, hi, color=STICK_COLOR, alpha=0.18, lw=0, label="stick" if k == 0 else None)
@@ -103,7 +126,7 @@ def plot_boundary_stress(result, ax=None, friction: Optional[float] = None, marg
         ax.plot(xs, bound, "--", color="0.35", lw=1, label=name)
         ax.plot(xs, -bound, "--", color="0.35", lw=1)
     ax.axhline(0, color="k", lw=0.5)
-    ax.set_xlabel("x")
+    ax.set_xlabel(data["label"])
     ax.set_ylabel("boundary stress")
     ax.set_title(f"{result.method}, {result.law}" + (f", F = {friction:g}" if friction is not None else ""))
     ax.legend(loc="best", fontsize=8)
