@@ -230,6 +230,7 @@ class Mesh:
         self.facet_tags = np.ascontiguousarray(tags)
 
     def _orient(self, pts, cells):
+        _check_manifold(cells, self.cell_type)
         X = pts[cells]
         h = np.max(np.linalg.norm(X[:, :, None, :] - X[:, None, :, :], axis=-1), axis=(1, 2))
         if self.cell_type in ("triangle", "quad"):
@@ -264,7 +265,6 @@ class Mesh:
             vol = sum(_tet_volume(X[:, list(t)]) for t in split)
             if np.any(vol <= 1e-12 * h ** 3):
                 raise ValueError(f"cell {int(np.argmax(vol <= 1e-12 * h ** 3))} (hexahedron) is inverted or degenerate")
-        _check_manifold(cells, self.cell_type)
         return cells
 
     # -- construction ---------------------------------------------------------------------------
