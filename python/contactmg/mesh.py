@@ -58,9 +58,16 @@ def _check_no_overlap_2d(pts: np.ndarray, cells: np.ndarray) -> None:
     if len(pairs) == 0:
         return
     a, b = pairs[:, 0], pairs[:, 1]
-    near = np.linalg.norm(centre[a] - centre[b], axis=1) <= radius[a] + radius[b]
+    lo, hi = X.min(axis=1), X.max(axis=1)
+    near = np.all((lo[a] < hi[b]) & (lo[b] < hi[a]), axis=1)  # bounding boxes overlap
     a, b = a[near], b[near]
+    # Positive convex cells that share an edge lie on either side of it (_check_not_folded saw to
+    # the orientation): such neighbours cannot overlap and are most of the candidates.
     k = cells.shape[1]
+    shared = np.zeros(len(a), np.int64)
+    for i in range(k):
+        shared += np.any(cells[a, i:i + 1] == cells[b], axis=1)
+    a, b = a[shared < 2], b[shared < 2]
     h = radius.max()
     tol = 1e-10 * h * h
     for p, q in ((a, b), (b, a)):
