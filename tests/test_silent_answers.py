@@ -116,11 +116,26 @@ def test_malformed_facets_are_rejected(cell):
         t[0] = bad
         with pytest.raises(ValueError, match="facet tags must be integers"):
             Mesh(m.points, m.cells, cell, facets, t)
+    with pytest.raises(ValueError, match="facet tags must be integers"):  # a tagger that gives NaN
+        Mesh.from_cells(m.points, m.cells, cell, lambda mid: np.where(mid[:, 0] > 0.5, np.nan, 1.0))
     # integer-valued floats are integers; a facet given against its cell's orientation is turned
     # outward (its normal is the outward one)
     ok = Mesh(m.points, m.cells, cell, facets[:, ::-1], tags.astype(float))
     np.testing.assert_array_equal(ok.facet_tags, tags)
     np.testing.assert_allclose(ok.facet_normals(), m.facet_normals())
+
+
+def test_read_mesh_rejects_non_integer_tags(tmp_path):
+    r = rectangle(2, 2)
+    tags = np.arange(len(r.facets), dtype=float)
+    meshio.write(tmp_path / "ok.vtu", meshio.Mesh(r.points, [("triangle", r.cells), ("line", r.facets)],
+                                                  cell_data={"tag": [np.zeros(r.num_cells), tags]}))
+    np.testing.assert_array_equal(np.sort(cm.read_mesh(tmp_path / "ok.vtu").facet_tags), np.arange(len(r.facets)))
+    tags[3] = np.nan
+    meshio.write(tmp_path / "nan.vtu", meshio.Mesh(r.points, [("triangle", r.cells), ("line", r.facets)],
+                                                   cell_data={"tag": [np.zeros(r.num_cells), tags]}))
+    with pytest.raises(ValueError, match="facet tags must be integers"):
+        cm.read_mesh(tmp_path / "nan.vtu")
 
 
 def test_mesh_that_is_no_manifold_or_overlaps_is_rejected():

@@ -72,9 +72,12 @@ def read_mesh(source: Union[str, os.PathLike, meshio.Mesh], dim: Optional[int] =
             for f, t in zip(block.data.tolist(), np.asarray(data).tolist()):
                 i = lookup.get(tuple(sorted(f)))
                 if i is not None:
+                    if not (np.isfinite(t) and float(t) == int(t)):
+                        raise ValueError(f"facet {f} has tag {t!r}: facet tags must be integers")
                     tags[i] = int(t)
         break
-    return Mesh(tmp.points, tmp.cells, cell_type, facets, tags)
+    # the cells are checked and the facets are the boundary facets by construction
+    return Mesh._trusted(tmp.points, tmp.cells, cell_type, facets, tags)
 
 
 def _pad(v: np.ndarray) -> np.ndarray:

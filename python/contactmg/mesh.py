@@ -277,8 +277,9 @@ class Mesh:
     # -- construction ---------------------------------------------------------------------------
     @classmethod
     def _trusted(cls, points, cells, cell_type, facets, facet_tags) -> "Mesh":
-        """A mesh made by the core's refinement, whose cells the core has checked (positive
-        Jacobians): skips the Python validation, which costs seconds on million-node levels."""
+        """A mesh whose arrays are known valid: refined by the core, whose cells the core has
+        checked (positive Jacobians), or cells validated here with facets made by
+        boundary_facets. Skips the Python validation, which costs seconds on million-node levels."""
         m = object.__new__(cls)
         m.points, m.cells, m.cell_type, m.facets, m.facet_tags = points, cells, cell_type, facets, facet_tags
         return m
@@ -293,10 +294,12 @@ class Mesh:
         facets = boundary_facets(tmp.cells, cell_type)
         tags = np.zeros(len(facets), np.int64)
         if tagger is not None:
-            tags = np.asarray(tagger(tmp.points[facets].mean(axis=1)), dtype=np.int64)
+            tags = np.asarray(tagger(tmp.points[facets].mean(axis=1)))
             if tags.shape != (len(facets),):
                 raise ValueError(f"the tagger returned shape {tags.shape}, expected ({len(facets)},)")
-        return cls(tmp.points, tmp.cells, cell_type, facets, tags)
+            tags = _integer_tags(tags, len(facets))
+        # the cells are checked and the facets are the boundary facets by construction
+        return cls._trusted(tmp.points, tmp.cells, cell_type, facets, tags)
 
     # -- queries --------------------------------------------------------------------------------
     @property
