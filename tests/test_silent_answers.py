@@ -352,3 +352,33 @@ def test_numpy_scalars_planar_round_off_and_unambiguous_tags(tmp_path):
                        obstacle=cm.PlaneObstacle((0.0, 0.0), (0.0, -1.0)))
     with pytest.raises(ValueError, match="Dirichlet values must be finite numbers"):
         ContactProblem(h, MAT, [Dirichlet(RECT_TOP, ("0", -0.01))])
+
+
+def test_box_pairs_and_components_match_brute_force():
+    from contactmg.mesh import _box_pairs, connected_components
+
+    rng = np.random.default_rng(5)
+    lo = rng.uniform(0, 10, (300, 2))
+    hi = lo + rng.uniform(1e-3, 1, (300, 1)) * 10.0 ** rng.uniform(-2, 0.5, (300, 1))  # sizes over 2.5 decades
+    a, b = _box_pairs(lo, hi)
+    i, j = np.triu_indices(300, 1)
+    meet = np.all((lo[i] < hi[j]) & (lo[j] < hi[i]), axis=1)
+    assert sorted(zip(a.tolist(), b.tolist())) == sorted(zip(i[meet].tolist(), j[meet].tolist()))
+    # components against scipy's, on three blocks numbered at random, plus a node in no cell
+    import scipy.sparse as sp
+    from scipy.sparse.csgraph import connected_components as scipy_components
+
+    blocks = [rectangle(3, 2, origin=(3.0 * k, 0.0)) for k in range(3)]
+    offsets = np.cumsum([0] + [m.num_points for m in blocks])
+    cells = np.vstack([m.cells + o for m, o in zip(blocks, offsets)])
+    n = offsets[-1] + 1
+    perm = rng.permutation(n)
+    cells = perm[cells]
+    count, label = connected_components(cells, n)
+    assert count == 3 and label[perm[n - 1]] == -1
+    g = sp.coo_matrix((np.ones(cells.size), (np.repeat(cells[:, 0], 3), cells.ravel())), shape=(n, n))
+    _, ref = scipy_components(g, directed=False)
+    used = label >= 0
+    # the same partition: a label of ours maps to exactly one of scipy's and back
+    pairs = set(zip(label[used].tolist(), ref[used].tolist()))
+    assert len(pairs) == 3 and len({p[0] for p in pairs}) == 3 and len({p[1] for p in pairs}) == 3

@@ -44,32 +44,64 @@ def _check_manifold(cells: np.ndarray, cell_type: str) -> None:
                          f"(cell {int(first[i] // len(local))} and others); an interior facet belongs to exactly two")
 
 
+def _box_pairs(lo: np.ndarray, hi: np.ndarray):
+    """Pairs (a, b), a < b, of boxes [lo, hi] (m, 2) that overlap with positive area. Boxes go to
+    grids of cell size 2^L s_min by their own size, so a graded mesh costs O(m log(s_max/s_min)):
+    each box meets the boxes of its own or a coarser grid in the at most 4 grid cells it touches."""
+    size = np.maximum((hi - lo).max(axis=1), 1e-300)
+    smin = float(size.min())
+    level = np.maximum(np.ceil(np.log2(size / smin) - 1e-12), 0).astype(np.int64)
+    origin = lo.min(axis=0)
+    found = []
+
+    def buckets(sel, h):
+        b0 = np.floor((lo[sel] - origin) / h).astype(np.int64)
+        b1 = np.floor((hi[sel] - origin) / h).astype(np.int64)
+        ids, keys = [], []
+        for dx in (0, 1):
+            for dy in (0, 1):
+                ok = (b0[:, 0] + dx <= b1[:, 0]) & (b0[:, 1] + dy <= b1[:, 1])
+                ids.append(sel[ok])
+                keys.append((b0[ok, 0] + dx) * (2 ** 31) + (b0[ok, 1] + dy))
+        return np.concatenate(ids), np.concatenate(keys)
+
+    for L in np.unique(level):
+        h = smin * 2.0 ** L
+        big_ids, big_keys = buckets(np.flatnonzero(level == L), h)
+        order = np.argsort(big_keys, kind="stable")
+        big_ids, big_keys = big_ids[order], big_keys[order]
+        q_ids, q_keys = buckets(np.flatnonzero(level <= L), h)
+        start = np.searchsorted(big_keys, q_keys, side="left")
+        count = np.searchsorted(big_keys, q_keys, side="right") - start
+        a = np.repeat(q_ids, count)
+        offset = np.arange(int(count.sum())) - np.repeat(np.cumsum(count) - count, count)
+        b = big_ids[np.repeat(start, count) + offset]
+        keep = (level[a] < L) | (a < b)  # a pair of one level once
+        a, b = a[keep], b[keep]
+        keep = np.all((lo[a] < hi[b]) & (lo[b] < hi[a]), axis=1)
+        found.append(np.minimum(a[keep], b[keep]) * len(lo) + np.maximum(a[keep], b[keep]))
+    pairs = np.sort(np.concatenate(found)) if found else np.zeros(0, np.int64)
+    pairs = pairs[np.r_[True, pairs[1:] != pairs[:-1]]] if len(pairs) else pairs  # two boxes meet in several grid cells
+    return pairs // len(lo), pairs % len(lo)
+
+
 def _check_no_overlap_2d(pts: np.ndarray, cells: np.ndarray) -> None:
     """Cells that overlap without sharing an edge (the edge test of _check_not_folded cannot see
-    them): no node lies inside a cell it does not belong to, and no two edges cross. Candidate
-    pairs come from a k-d tree of cell centres, so the cost stays near linear."""
-    from scipy.spatial import cKDTree
-
+    them): no node lies inside a cell it does not belong to, and no two edges cross. Candidates
+    are the pairs of cells whose bounding boxes overlap."""
     X = pts[cells]
-    centre = X.mean(axis=1)
-    radius = np.linalg.norm(X - centre[:, None, :], axis=-1).max(axis=1)
-    tree = cKDTree(centre)
-    pairs = tree.query_pairs(2.0 * float(radius.max()), output_type="ndarray")
-    if len(pairs) == 0:
-        return
-    a, b = pairs[:, 0], pairs[:, 1]
-    lo, hi = X.min(axis=1), X.max(axis=1)
-    near = np.all((lo[a] < hi[b]) & (lo[b] < hi[a]), axis=1)  # bounding boxes overlap
-    a, b = a[near], b[near]
+    a, b = _box_pairs(X.min(axis=1), X.max(axis=1))
     # Positive convex cells that share an edge lie on either side of it (_check_not_folded saw to
     # the orientation): such neighbours cannot overlap and are most of the candidates.
     k = cells.shape[1]
-    shared = np.zeros(len(a), np.int64)
+    inb = np.stack([np.any(cells[a, i:i + 1] == cells[b], axis=1) for i in range(k)], axis=1)
+    edge = np.zeros(len(a), bool)
     for i in range(k):
-        shared += np.any(cells[a, i:i + 1] == cells[b], axis=1)
-    a, b = a[shared < 2], b[shared < 2]
-    h = radius.max()
-    tol = 1e-10 * h * h
+        edge |= inb[:, i] & inb[:, (i + 1) % k]
+    a, b = a[~(edge & (inb.sum(axis=1) == 2))], b[~(edge & (inb.sum(axis=1) == 2))]
+    radius = np.linalg.norm(X - X.mean(axis=1)[:, None, :], axis=-1).max(axis=1)
+    # round-off in the cross products below, for the sizes of the two cells at hand
+    tol = 1e-10 * radius[a] * radius[b]
     for p, q in ((a, b), (b, a)):
         # a node of cell q strictly inside cell p (cells are counter-clockwise and convex)
         for j in range(k):
@@ -83,15 +115,15 @@ def _check_no_overlap_2d(pts: np.ndarray, cells: np.ndarray) -> None:
             if np.any(inside):
                 i = int(np.argmax(inside))
                 raise ValueError(f"the mesh overlaps itself: node {int(node[i])} lies inside cell {int(p[i])}")
+
+    def side(u, v, w):
+        return (v[:, 0] - u[:, 0]) * (w[:, 1] - u[:, 1]) - (v[:, 1] - u[:, 1]) * (w[:, 0] - u[:, 0])
+
     # two edges that cross at interior points of both
     for i in range(k):
         for j in range(k):
             p0, p1 = X[a, i], X[a, (i + 1) % k]
             q0, q1 = X[b, j], X[b, (j + 1) % k]
-
-            def side(u, v, w):
-                return (v[:, 0] - u[:, 0]) * (w[:, 1] - u[:, 1]) - (v[:, 1] - u[:, 1]) * (w[:, 0] - u[:, 0])
-
             d1, d2, d3, d4 = side(p0, p1, q0), side(p0, p1, q1), side(q0, q1, p0), side(q0, q1, p1)
             cross = (((d1 > tol) & (d2 < -tol)) | ((d1 < -tol) & (d2 > tol))) & \
                     (((d3 > tol) & (d4 < -tol)) | ((d3 < -tol) & (d4 > tol)))
@@ -102,19 +134,27 @@ def _check_no_overlap_2d(pts: np.ndarray, cells: np.ndarray) -> None:
 
 def connected_components(cells: np.ndarray, num_points: int):
     """(count, label): the connected pieces of the mesh (cells joined through shared nodes);
-    label[i] is the piece of node i, -1 for a node that belongs to no cell."""
-    import scipy.sparse as sp
-    from scipy.sparse.csgraph import connected_components as components
-
+    label[i] is the piece of node i, -1 for a node that belongs to no cell. Union-find by hooking
+    roots onto the smaller root and pointer jumping, in numpy."""
     k = cells.shape[1]
-    rows = np.repeat(cells[:, 0], k - 1)
-    cols = cells[:, 1:].ravel()
+    u = np.repeat(cells[:, 0], k - 1)
+    v = cells[:, 1:].ravel()
+    parent = np.arange(num_points)
+    while True:
+        pu, pv = parent[u], parent[v]
+        differ = pu != pv
+        if not np.any(differ):
+            break
+        np.minimum.at(parent, np.maximum(pu[differ], pv[differ]), np.minimum(pu[differ], pv[differ]))
+        while True:  # point every node at its root
+            jumped = parent[parent]
+            if np.array_equal(jumped, parent):
+                break
+            parent = jumped
     used = np.zeros(num_points, bool)
     used[cells.ravel()] = True
-    g = sp.coo_matrix((np.ones(len(rows), np.int8), (rows, cols)), shape=(num_points, num_points))
-    _, label = components(g, directed=False)
-    label = np.where(used, label, -1)
-    ids, label[used] = np.unique(label[used], return_inverse=True)
+    label = np.full(num_points, -1, np.int64)
+    ids, label[used] = np.unique(parent[used], return_inverse=True)
     return len(ids), label
 
 
