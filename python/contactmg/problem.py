@@ -25,6 +25,9 @@ CYCLES = ("V", "W", "F")
 
 
 INT32_MAX = 2 ** 31 - 1  # the core counts cycles in a C int
+# The redesigned core (issue 9) takes cycle, nu1, nu2 and a progress callback per solve; an older
+# core takes the cycle at construction only, and then one core solver is kept per cycle choice.
+SOLVE_TAKES_CYCLE_OPTIONS = "progress" in (_core.ContactSolver2D.solve.__doc__ or "")
 
 
 def tag_tuple(tags, name: str) -> tuple:
@@ -203,7 +206,7 @@ class ContactProblem:
     @property
     def setup_seconds(self) -> float:
         """Hierarchy, assembly and the build of the core solver of the default cycle (once built)."""
-        return self.assembly_seconds + self._build_seconds.get(self.default_cycle, 0.0)
+        return self.assembly_seconds + self._build_seconds.get(self._solver_key(self.default_cycle), 0.0)
 
     # -- setup helpers --------------------------------------------------------------------------
     def _check_rigid_motion(self):
@@ -264,8 +267,6 @@ class ContactProblem:
 
     def _new_core_solver(self, law: str, options: CycleOptions, fixed=None, fixed_values=None, load=None):
         """A core solver of this problem's matrix and data (building one does not re-assemble)."""
-        # Switch point for the core redesign: once the core takes cycle/nu1/nu2 per solve, one
-        # solver serves every CycleOptions and `options` moves to the solve call.
         d = self.mesh.dim
         cls = _core.ContactSolver2D if d == 2 else _core.ContactSolver3D
         c = self.contact
@@ -278,11 +279,16 @@ class ContactProblem:
         """The core solver for the cycle options (defaults: the problem's), built on first use and
         kept: one per (cycle, nu1, nu2)."""
         options = self._options(cycle, nu1, nu2)
-        if options not in self._solvers:
+        key = self._solver_key(options)
+        if key not in self._solvers:
             t0 = time.perf_counter()
-            self._solvers[options] = self._new_core_solver(self.law, options)
-            self._build_seconds[options] = time.perf_counter() - t0
-        return self._solvers[options]
+            self._solvers[key] = self._new_core_solver(self.law, options)
+            self._build_seconds[key] = time.perf_counter() - t0
+        return self._solvers[key]
+
+    def _solver_key(self, options: CycleOptions) -> CycleOptions:
+        # a core that takes the cycle per solve serves every choice with the solver of the defaults
+        return self.default_cycle if SOLVE_TAKES_CYCLE_OPTIONS else options
 
     @property
     def solver(self):
@@ -299,7 +305,8 @@ class ContactProblem:
               u0: Optional[np.ndarray] = None, reference: Optional[ContactResult] = None,
               fixed_point_tol: float = 1e-9, fixed_point_max: int = 100,
               error_reference: Optional[np.ndarray] = None, cycle: Optional[str] = None,
-              nu1: Optional[int] = None, nu2: Optional[int] = None) -> ContactResult:
+              nu1: Optional[int] = None, nu2: Optional[int] = None,
+              progress: Optional[Callable[[dict], None]] = None) -> ContactResult:
         """Solve with `method`: "nmg" (Algorithm 2 for Coulomb; truncated monotone multigrid for
         frictionless and Tresca; linear multigrid without contact), "fixed-point" (Algorithm 1,
         Coulomb only) or "linear" (the cost reference: the linear problem with the contact state of
@@ -308,7 +315,10 @@ class ContactProblem:
         problem's; changing them re-uses the assembled problem (a core solver is built once per
         choice). With `error_reference` (a displacement u*), history["error"] records ||u - u*||_A
         after every cycle (one extra matrix product per cycle, kept out of the timings).
-        A progress callback is not offered yet: the core runs all cycles in one call."""
+        `progress(record)` is called after every cycle with a dict (cycle, outer,
+        correction_norm, energy, seconds, error, active, stick, slip, rebuilt) by a core that
+        reports cycles (SOLVE_TAKES_CYCLE_OPTIONS); an exception it raises stops the solve. With an
+        older core, which runs all cycles in one call, asking for it is an error."""
         if method not in METHODS:
             raise ValueError(f"method must be one of {METHODS}, got {method!r}")
         options = self._options(cycle, nu1, nu2)
@@ -320,8 +330,15 @@ class ContactProblem:
         for name, v in (("max_cycles", max_cycles), ("fixed_point_max", fixed_point_max)):
             if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, np.integer)) or not 1 <= v <= INT32_MAX:
                 raise ValueError(f"{name} must be an integer in 1..{INT32_MAX}, got {v!r}")
+        if progress is not None and not callable(progress):
+            raise ValueError(f"progress must be a callable (called with a dict after every cycle), got {progress!r}")
         kw = dict(tol=float(tol), rtol=float(rtol), max_cycles=int(max_cycles), fixed_point_tol=float(fixed_point_tol),
                   fixed_point_max=int(fixed_point_max), reference=error_reference)
+        if SOLVE_TAKES_CYCLE_OPTIONS:
+            kw.update(cycle=options.cycle, nu1=options.nu1, nu2=options.nu2, progress=progress)
+        elif progress is not None:
+            raise ValueError("progress needs a core that reports every cycle (the redesigned core of issue 9); this "
+                             "build runs all cycles in one call")
         if method == "fixed-point":
             if not isinstance(self.friction, Coulomb) or self.law == "linear":
                 raise ValueError("the fixed-point method (Algorithm 1) needs Coulomb friction on a contact boundary")
@@ -347,7 +364,7 @@ class ContactProblem:
 
     def _result(self, raw: dict, method: str, options: CycleOptions) -> ContactResult:
         res = ContactResult.from_raw(self, raw, method)
-        res.setup_seconds = self.assembly_seconds + self._build_seconds.get(options, 0.0)
+        res.setup_seconds = self.assembly_seconds + self._build_seconds.get(self._solver_key(options), 0.0)
         res.extra["cycle_options"] = {"cycle": options.cycle, "nu1": options.nu1, "nu2": options.nu2}
         return res
 

@@ -69,7 +69,8 @@ class ContactResult:
         state = np.full(problem.mesh.num_points, NOT_CONTACT, dtype=np.int8)
         state[c.nodes] = raw["state"]
         return cls(mesh=problem.mesh, method=method, law=problem.law, displacement=raw["u"],
-                   contact_nodes=c.nodes, contact_normals=c.normals, contact_frames=c.frames,
+                   contact_nodes=c.nodes, contact_normals=c.normals,
+                   contact_frames=raw.get("frames", c.frames),  # the core's own, once it returns them
                    contact_facets=c.facets, benchmark=getattr(problem, "benchmark", None),
                    contact_force=raw["contact_force"],
                    measure=c.measure, friction_bound=raw["friction_bound"], node_state=state,
