@@ -3,8 +3,9 @@
 The solvers stop when ||u^{k+1} - u^k||_A <= tol. That test cannot tell a solution from an iterate
 that the cycle maps back onto itself without solving anything (e.g. a smoother that flips a few
 contact nodes back and forth with an even number of sweeps per cycle). This module recomputes the
-residual r = A u - f from the displacement alone and measures every condition relative to the largest
-contact force, so a "converged" result can be confirmed or rejected.
+residual r = A u - f from the displacement alone and measures every force condition relative to the
+force scale of the problem and the penetration relative to its displacement scale, so a "converged"
+result can be confirmed or rejected.
 """
 from __future__ import annotations
 
@@ -33,8 +34,9 @@ def contact_conditions(problem, result) -> Dict[str, float]:
     all divided by the force scale (the largest contact force, support reaction or load; the
     stiffness scale max|A| max|u| for a body that carries no force); and penetration: max (u_n - g)
     divided by the displacement scale of the problem (the largest displacement, prescribed
-    displacement or gap; it does not vanish when every gap and normal displacement is zero). The contact state is recomputed from u (u_n >= g in contact, u_T == 0 sticking, both up to round-off),
-    not taken from the result."""
+    displacement or gap; it does not vanish when every gap and normal displacement is zero). The
+    contact state is recomputed from u (u_n >= g in contact, u_T == 0 sticking, both up to
+    round-off), not taken from the result; the frames are the result's (result.contact_frames)."""
     c = problem.contact
     u = np.asarray(result.displacement)
     r = problem.A.matvec(u) - problem.load

@@ -22,8 +22,6 @@ VectorField = Union[Sequence[float], np.ndarray, Callable[[np.ndarray], np.ndarr
 
 METHODS = ("nmg", "fixed-point", "linear")
 CYCLES = ("V", "W", "F")
-
-
 INT32_MAX = 2 ** 31 - 1  # the core counts cycles in a C int
 # The redesigned core (issue 9) takes cycle, nu1, nu2 and a progress callback per solve; an older
 # core takes the cycle at construction only, and then one core solver is kept per cycle choice.
@@ -215,7 +213,7 @@ class ContactProblem:
         mesh = self.mesh
         x, d = mesh.points, mesh.dim
         fixed = self.fixed.astype(bool)
-        count, label = connected_components(mesh.cells, mesh.num_points)
+        count, label = self._pieces()
         order = np.argsort(label, kind="stable")
         bounds = np.searchsorted(label[order], np.arange(count + 1))
         for k in range(count):
@@ -227,6 +225,19 @@ class ContactProblem:
                 f"node {int(nodes[0])} at {np.round(x[nodes[0]], 6).tolist()})")
             raise ValueError(f"the Dirichlet conditions leave rigid-body motion{where} free: "
                              "fix enough displacement components to hold " + ("the body" if count == 1 else "every piece"))
+
+    def _pieces(self):
+        """(count, label) of the connected pieces of the finest mesh, found on the coarsest mesh
+        (refinement splits cells and joins nothing) and handed down through the transfers: a
+        fine node lies in the piece of its first coarse parent."""
+        h = self.hierarchy
+        coarse = h.meshes[0]
+        count, label = connected_components(coarse.cells, coarse.num_points)
+        for t in h.transfers:
+            if np.any(np.diff(t.ptr) < 1):  # a node without parents: count on the fine mesh itself
+                return connected_components(self.mesh.cells, self.mesh.num_points)
+            label = label[t.parent[t.ptr[:-1]]]
+        return count, label
 
     def _contact_boundary(self, tags, obstacle) -> ContactBoundary:
         mesh, d = self.mesh, self.mesh.dim
@@ -282,7 +293,7 @@ class ContactProblem:
         key = self._solver_key(options)
         if key not in self._solvers:
             t0 = time.perf_counter()
-            self._solvers[key] = self._new_core_solver(self.law, options)
+            self._solvers[key] = self._new_core_solver(self.law, key)
             self._build_seconds[key] = time.perf_counter() - t0
         return self._solvers[key]
 
