@@ -77,7 +77,7 @@ def main():
         from contactmg.plots import plot_boundary_stress
         t = time.perf_counter()
         fig, ax = plt.subplots()
-        plot_boundary_stress(r, ax=ax, friction=0.4)
+        plot_boundary_stress(r, ax=ax, friction=0.4, margin=1.5)
         fig.savefig(os.path.join(d, "h.png"))
         plt.close(fig)
         t_plot = time.perf_counter() - t

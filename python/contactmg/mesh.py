@@ -19,13 +19,35 @@ _LOCAL_FACETS = {
 }
 
 
+def unique_rows(rows: np.ndarray, **kw):
+    """np.unique(rows, axis=0, **kw) for rows of non-negative node ids, through one int64 key per
+    row where it fits (a 1D sort: several times faster than the row sort of axis=0)."""
+    rows = np.asarray(rows, dtype=np.int64)
+    k = rows.shape[1]
+    base = int(rows.max(initial=0)) + 1
+    if rows.size == 0 or base ** k >= 2 ** 63:
+        return np.unique(rows, axis=0, **kw)
+    key = rows[:, 0].copy()
+    for j in range(1, k):
+        key = key * base + rows[:, j]
+    out = np.unique(key, **kw)
+    if not isinstance(out, tuple):
+        out = (out,)
+    uniq = np.empty((len(out[0]), k), np.int64)
+    rest = out[0]
+    for j in range(k - 1, -1, -1):
+        uniq[:, j] = rest % base
+        rest = rest // base
+    return (uniq,) + tuple(o.ravel() for o in out[1:]) if len(out) > 1 else uniq
+
+
 def _check_not_folded(cells: np.ndarray) -> None:
     """Cells oriented counter-clockwise one by one still overlap if one was inverted (folded over
     its neighbour): then a shared edge is traversed twice in the same direction, where a valid
     mesh traverses every interior edge once each way."""
     k = cells.shape[1]
     e = np.stack([cells, np.roll(cells, -1, axis=1)], axis=-1).reshape(-1, 2)
-    _, first, count = np.unique(e, axis=0, return_index=True, return_counts=True)
+    _, first, count = unique_rows(e, return_index=True, return_counts=True)
     if np.any(count > 1):
         a, b = e[first[np.argmax(count > 1)]]
         cell = int(first[np.argmax(count > 1)] // k)
@@ -37,7 +59,7 @@ def _check_manifold(cells: np.ndarray, cell_type: str) -> None:
     """Every facet of the cells belongs to one cell (boundary) or two (interior), never more."""
     local = np.array(_LOCAL_FACETS[cell_type])
     key = np.sort(cells[:, local].reshape(-1, local.shape[1]), axis=1)
-    _, first, count = np.unique(key, axis=0, return_index=True, return_counts=True)
+    _, first, count = unique_rows(key, return_index=True, return_counts=True)
     if np.any(count > 2):
         i = int(np.argmax(count > 2))
         raise ValueError(f"the mesh is not a manifold: facet {key[first[i]].tolist()} is shared by {int(count[i])} cells "
@@ -173,7 +195,7 @@ def boundary_facets(cells: np.ndarray, cell_type: str) -> np.ndarray:
     local = np.array(_LOCAL_FACETS[cell_type])
     all_f = cells[:, local].reshape(-1, local.shape[1])
     key = np.sort(all_f, axis=1)
-    _, inverse, counts = np.unique(key, axis=0, return_inverse=True, return_counts=True)
+    _, inverse, counts = unique_rows(key, return_inverse=True, return_counts=True)
     return np.ascontiguousarray(all_f[counts[inverse.ravel()] == 1])
 
 
@@ -201,14 +223,14 @@ def _boundary_facets_as_given(cells: np.ndarray, cell_type: str, facets: np.ndar
     if len(facets) == 0:
         return facets
     key = np.sort(facets, axis=1)
-    _, first, count = np.unique(key, axis=0, return_index=True, return_counts=True)
+    _, first, count = unique_rows(key, return_index=True, return_counts=True)
     if np.any(count > 1):
         i = int(first[np.argmax(count > 1)])
         raise ValueError(f"facet {i} ({facets[i].tolist()}) is given {int(count.max())} times: each boundary facet once")
     bnd = boundary_facets(cells, cell_type)
     bkey = np.sort(bnd, axis=1)
     both = np.concatenate([bkey, key])
-    _, inverse = np.unique(both, axis=0, return_inverse=True)
+    _, inverse = unique_rows(both, return_inverse=True)
     inverse = inverse.ravel()
     row_of = np.full(len(bnd) + len(facets), -1, np.int64)
     row_of[inverse[:len(bnd)]] = np.arange(len(bnd))
