@@ -3,8 +3,10 @@
 The core rotates each contact node into the frame built from its normal by the same rule
 (cpp: frame_from_normal): in 2D t is n turned by +90 degrees; in 3D t is orthogonal to n, built
 from the canonical axis least aligned with n, and s = n x t. Results carry these frames
-(ContactResult.contact_frames); checks and outputs use them from there. When the core returns its
-own frames, this function is the single place to switch to them.
+(ContactResult.contact_frames); checks and outputs use them from there. A core that returns its
+own frames (raw["frames"] of a solve) is taken at its word by ContactResult.from_raw; the
+problem's frames (ContactBoundary.frames) come from here until they are switched to the core
+solver's.
 """
 from __future__ import annotations
 
