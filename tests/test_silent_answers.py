@@ -382,3 +382,20 @@ def test_box_pairs_and_components_match_brute_force():
     # the same partition: a label of ours maps to exactly one of scipy's and back
     pairs = set(zip(label[used].tolist(), ref[used].tolist()))
     assert len(pairs) == 3 and len({p[0] for p in pairs}) == 3 and len({p[1] for p in pairs}) == 3
+
+
+def test_rigid_motion_per_piece_in_3d():
+    cube = unit_cube("tetra")
+    n = cube.num_points
+    two = Mesh(np.vstack([cube.points, cube.points + [2.0, 0.0, 0.0]]), np.vstack([cube.cells, cube.cells + n]),
+               "tetra", np.vstack([cube.facets, cube.facets + n]),
+               np.r_[np.where(cube.points[cube.facets].mean(axis=1)[:, 2] < 1e-9, 1, 0),
+                     np.where(cube.points[cube.facets].mean(axis=1)[:, 2] < 1e-9, 2, 0)])
+    h = cm.MeshHierarchy.build(two, 1)
+    with pytest.raises(ValueError, match="piece 2 of the 2 disconnected pieces"):
+        ContactProblem(h, MAT, [Dirichlet(1, (0.0, 0.0, 0.0))])
+    # rollers on the bottom (u_z = 0) leave the in-plane motion of each cube free
+    with pytest.raises(ValueError, match="piece 1 of the 2"):
+        ContactProblem(h, MAT, [Dirichlet(1, (None, None, 0.0)), Dirichlet(2, (0.0, 0.0, 0.0))])
+    p = ContactProblem(h, MAT, [Dirichlet(1, (0.0, 0.0, 0.0)), Dirichlet(2, (0.0, 0.0, 0.0))], body_force=(0, 0, -1.0))
+    assert p.mesh.dim == 3 and p.fixed.sum() == 2 * 4 * 3
