@@ -177,6 +177,13 @@ class MeshHierarchy:
         h.build_seconds = time.perf_counter() - t0
         return h
 
+    def truncated(self, levels: int) -> "MeshHierarchy":
+        """The first `levels` levels (coarse to fine) of this hierarchy, sharing its meshes."""
+        if isinstance(levels, bool) or not isinstance(levels, (int, np.integer)) or not 1 <= levels <= self.levels:
+            raise ValueError(f"levels must lie in 1..{self.levels}, got {levels!r}")
+        return MeshHierarchy(self.meshes[:levels], self.transfers[:levels - 1], self.build_seconds, self.kind,
+                             self.estimated_error[:levels])
+
     def new_nodes(self, level: int) -> np.ndarray:
         """Nodes that level `level` (an index into meshes; 0 is the coarse mesh) adds to the one below."""
         self._check_level(level)
