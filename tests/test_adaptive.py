@@ -290,3 +290,40 @@ def test_hertz_problem_hierarchy_option():
         hertz_problem(levels=2, hierarchy="graded")
     p = hertz_problem(levels=3, hierarchy="adaptive")
     assert p.hierarchy.kind == "adaptive" and p.hierarchy.levels == 3
+
+
+# -- command line ---------------------------------------------------------------------------------
+def run(*args, timeout=120):
+    import subprocess
+    import sys
+
+    return subprocess.run([sys.executable, "-m", "contactmg", *args], capture_output=True, text=True, timeout=timeout)
+
+
+def test_cli_hertz_hierarchy_option_and_estimated_error():
+    import json
+
+    r = run("hertz", "--hierarchy", "adaptive", "--levels", "6", "--json", "-", "-q")
+    assert r.returncode == 0, r.stderr
+    d = json.loads(r.stdout)
+    assert d["hierarchy"] == "adaptive" and d["converged"] and d["dofs"] == 2 * d["nodes"]
+    assert len(d["estimated_error"]) == 6 and np.all(np.diff(d["estimated_error"]) < 0)
+    u = json.loads(run("hertz", "--levels", "3", "--json", "-", "-q").stdout)
+    assert u["hierarchy"] == "uniform" and "estimated_error" not in u
+    bad = run("hertz", "--hierarchy", "adaptive", "--cell", "quad")
+    assert bad.returncode == 2 and "Traceback" not in bad.stderr
+    assert "triangles" in bad.stderr.strip().splitlines()[-1]
+    bad = run("hertz", "--hierarchy", "graded")
+    assert bad.returncode == 2 and "hierarchy" in bad.stderr.strip().splitlines()[-1]
+
+
+def test_cli_table1_adaptive_levels_near_the_papers_dofs_and_verified():
+    import json
+
+    r = run("table1", "--hierarchy", "adaptive", "--levels", "3", "5", "--frictions", "0.4", "5", "--json", "-", "-q")
+    assert r.returncode == 0, r.stderr
+    d = json.loads(r.stdout)
+    assert d["hierarchy"] == "adaptive" and len(d["estimated_error"]) == 2
+    for L, dofs in zip(d["levels"], d["dofs"]):
+        assert PAPER_ADAPTIVE_DOFS[L] / 2 <= dofs <= 2 * PAPER_ADAPTIVE_DOFS[L]
+    assert np.all(np.array(d["nmg_converged"])) and np.max(d["nmg_violation"]) < VIOLATION_TOL
