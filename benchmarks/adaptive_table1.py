@@ -25,7 +25,7 @@ import numpy as np
 
 from contactmg import _core, hertz
 from contactmg.hierarchy import MeshHierarchy, _refined
-from contactmg.table1 import failed_runs, format_table, table1
+from contactmg.table1 import failed_runs, format_table, merge_levels, table1
 
 
 def energy(problem, v):
@@ -161,8 +161,15 @@ def part_table(a, out):
         if L <= h.levels:
             print(f"  level {L}: {2 * h.meshes[L - 1].num_points:,} dofs, paper {d:,} (ratio "
                   f"{2 * h.meshes[L - 1].num_points / d:.2f})")
-    tab = table1(a.levels, a.frictions, hierarchy=h, progress=False)
-    tab["paper_dofs"] = [hertz.PAPER_ADAPTIVE_DOFS.get(L) for L in a.levels]
+    tab = None
+    for L in a.levels:  # one level at a time, saved after each (level 11 takes minutes per coefficient)
+        row = table1([L], a.frictions, hierarchy=h, progress=False, fixed_point_max=a.fixed_point_max)
+        tab = row if tab is None else merge_levels(tab, row)
+        tab["estimated_error"] = [float(h.estimated_error[k - 1]) for k in tab["levels"]]
+        tab["paper_dofs"] = [hertz.PAPER_ADAPTIVE_DOFS.get(k) for k in tab["levels"]]
+        out["table"] = tab
+        save(a, out)
+        print(format_table(row), flush=True)
     print(format_table(tab))
     print(f"nmg violations <= {max(max(v) for v in tab['nmg_violation']):.1e} (relative); failed: {failed_runs(tab)}")
     out["table"] = tab
@@ -180,7 +187,9 @@ def main():
     ap.add_argument("--cost-adaptive", type=int, nargs="+", default=[7, 8, 9, 10, 11])
     ap.add_argument("--cost-uniform", type=int, nargs="+", default=[5, 6, 7, 8])
     ap.add_argument("--repeat", type=int, default=2)
+    ap.add_argument("--fixed-point-max", type=int, default=100, help="outer iterations of Algorithm 1 before 'no conv.'")
     ap.add_argument("--out", default="out")
+    ap.add_argument("--tag", default="", help="suffix of the JSON file name (runs split over processes)")
     ap.add_argument("--no-plot", dest="plot", action="store_false")
     a = ap.parse_args()
     os.makedirs(a.out, exist_ok=True)
@@ -188,8 +197,12 @@ def main():
     for part in a.parts:
         print(f"== {part}", flush=True)
         {"table": part_table, "accuracy": part_accuracy, "cost": part_cost}[part](a, out)
-        with open(os.path.join(a.out, "adaptive_table1.json"), "w") as fh:
-            json.dump(out, fh, indent=1, default=float)
+        save(a, out)
+
+
+def save(a, out):
+    with open(os.path.join(a.out, f"adaptive_table1{a.tag}.json"), "w") as fh:
+        json.dump(out, fh, indent=1, default=float)
 
 
 if __name__ == "__main__":
