@@ -8,7 +8,7 @@ from contactmg import _core
 from contactmg.checks import VIOLATION_TOL, contact_conditions
 from contactmg.estimator import doerfler_mark, estimate
 from contactmg.generators import RECT_BOTTOM, RECT_LEFT, RECT_RIGHT, RECT_TOP
-from contactmg.hertz import (PAPER_ADAPTIVE_DOFS, halfwidth, hertz_adaptive_hierarchy, hertz_problem,
+from contactmg.hertz import (PAPER_ADAPTIVE_DOFS, halfwidth, hertz_adaptive_hierarchy, hertz_problem, peak_pressure,
                              hertz_problem_on)
 from contactmg.hierarchy import MeshHierarchy, _refined, longest_edge_first
 from contactmg.mesh import Mesh
@@ -360,3 +360,38 @@ def test_algorithm2_on_adaptive_levels_for_the_paper_frictions(F, hertz_adaptive
                 assert np.sqrt(np.sum(e * p.A.matvec(e))) <= 1e-6 * np.sqrt(np.sum(r.displacement * p.A.matvec(r.displacement)))
     if F <= 2:
         assert max(cycles) <= 25 and max(cycles[1:]) - min(cycles[1:]) <= 4, (F, cycles)
+
+
+def test_adaptive_beats_uniform_at_comparable_dofs():
+    """Frictionless Hertz, against a common reference (adaptive level 7 refined uniformly twice):
+    adaptive level 6 (2.3k dofs) has less than half the energy error of uniform level 4 (2.45k
+    dofs), and its contact half-width and peak pressure are closer to Hertz's."""
+    import matplotlib.tri as mtri
+
+    h = hertz_adaptive_hierarchy(7, 0.0)
+    pref, rref, trans = hertz_reference(h, friction=0.0)
+    norm = np.sqrt(np.sum(rref.displacement * pref.A.matvec(rref.displacement)))
+
+    def err(u):
+        e = u - rref.displacement
+        return np.sqrt(np.sum(e * pref.A.matvec(e))) / norm
+
+    pa = hertz_problem_on(h.truncated(6), 0.0)
+    ra = pa.solve()
+    ua = ra.displacement
+    for t in trans[5:]:
+        ua = t.matrix() @ ua
+    pu = hertz_problem(levels=4, friction=0.0)
+    ru = pu.solve()
+    tri = mtri.Triangulation(pu.mesh.points[:, 0], pu.mesh.points[:, 1], pu.mesh.cells)
+    q = pref.mesh.points.copy()
+    inside = tri.get_trifinder()(q[:, 0], q[:, 1]) >= 0
+    q[~inside] = np.array([0.0, 0.4]) + (q[~inside] - [0.0, 0.4]) * (1 - 2e-2)  # just inside the inscribed polygon
+    uu = np.stack([mtri.LinearTriInterpolator(tri, ru.displacement[:, a])(q[:, 0], q[:, 1]).data for a in range(2)], 1)
+    assert np.all(np.isfinite(uu))
+    assert 2 * pa.mesh.num_points <= 2 * pu.mesh.num_points
+    assert err(ua) < 0.5 * err(uu)
+    for r in (ra, ru):
+        r.hertz = (halfwidth(abs(r.reaction[1])), peak_pressure(abs(r.reaction[1])))
+    assert abs(ra.contact_halfwidth - ra.hertz[0]) < abs(ru.contact_halfwidth - ru.hertz[0])
+    assert abs(-ra.normal_stress.min() - ra.hertz[1]) < abs(-ru.normal_stress.min() - ru.hertz[1])
