@@ -25,6 +25,11 @@ def main():
         ["skip_work.py", "--level", str(top - 1), "--out", a.out],
         ["stress.py", "--level", str(top - 2), "--out", a.out],
         ["discretization_error.py", "--levels", "3", str(top - 2), "--reference", str(top), "--out", a.out],
+        # issue 11: adaptive Table 1 to level 9 (level 11 takes about an hour: Algorithm 1 at F >= 5)
+        ["adaptive_table1.py", "--levels", *[str(L) for L in sorted({3, 5, 7, top})], "--reference-level", str(top),
+         "--accuracy-adaptive", "3", str(top - 1), "--accuracy-uniform", "2", str(top - 3),
+         "--cost-adaptive", *[str(L) for L in range(5, top + 1)], "--cost-uniform", *[str(L) for L in range(4, top)],
+         "--out", a.out],
     ]
     if not a.quick:  # issue 4: Algorithm 1 at F = 5 up to the finest uniform level that fits (about 10 minutes)
         jobs.append(["fixed_point_F5.py", "--start", "6", "--stop", "9", "--out", a.out])

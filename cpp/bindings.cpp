@@ -5,6 +5,7 @@
 #include <pybind11/stl.h>
 #include "assembly.hpp"
 #include "contact_solver.hpp"
+#include "fem/bisection.hpp"
 #include "refinement.hpp"
 
 namespace py = pybind11;
@@ -362,4 +363,31 @@ PYBIND11_MODULE(_core, m) {
     out["boundary_tags"] = to_numpy(R.boundary_tags, {(py::ssize_t)R.boundary_tags.size()});
     return out;
   });
+
+  m.def("bisect", [](DArr points, IArr cells, IArr facets, IArr facet_tags, IArr marked_cells) {
+    MeshView v = view(points, cells, "triangle");
+    require_shape(facets, "facets", {-1, 2});
+    require_shape(facet_tags, "facet_tags", {facets.shape(0)});
+    require_shape(marked_cells, "marked_cells", {-1});
+    BisectedMesh R;
+    {
+      py::gil_scoped_release r;
+      R = bisect_2d(v.X, v.n, v.C, v.m, facets.data(), facet_tags.data(), facets.shape(0), marked_cells.data(),
+                    marked_cells.shape(0));
+    }
+    const py::ssize_t nf = R.points.size() / 2;
+    py::dict out;
+    out["points"] = to_numpy(R.points, {nf, 2});
+    out["cells"] = to_numpy(R.cells, {(py::ssize_t)R.cells.size() / 3, 3});
+    out["facets"] = to_numpy(R.facets, {(py::ssize_t)R.facets.size() / 2, 2});
+    out["facet_tags"] = to_numpy(R.facet_tags, {(py::ssize_t)R.facet_tags.size()});
+    out["ptr"] = to_numpy(R.ptr, {(py::ssize_t)R.ptr.size()});
+    out["parent"] = to_numpy(R.parent, {(py::ssize_t)R.parent.size()});
+    out["weight"] = to_numpy(R.weight, {(py::ssize_t)R.weight.size()});
+    out["boundary_nodes"] = to_numpy(R.boundary_nodes, {(py::ssize_t)R.boundary_nodes.size()});
+    out["boundary_tags"] = to_numpy(R.boundary_tags, {(py::ssize_t)R.boundary_tags.size()});
+    return out;
+  }, py::arg("points"), py::arg("cells"), py::arg("facets"), py::arg("facet_tags"), py::arg("marked_cells"),
+     "Newest-vertex bisection of the marked triangles with conforming closure (refinement edge: the "
+     "first two vertices of a cell); the same keys as refine()");
 }

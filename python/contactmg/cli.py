@@ -81,6 +81,7 @@ def _parser() -> argparse.ArgumentParser:
     h.add_argument("--cycle", choices=["V", "W", "F"], default="F")
     h.add_argument("--nu1", type=_positive_int("--nu1", 0, 100), default=3)
     h.add_argument("--nu2", type=_positive_int("--nu2", 0, 100), default=3)
+    h.add_argument("--hierarchy", choices=["uniform", "adaptive"], default="uniform")
     h.add_argument("--json", type=_writable, metavar="PATH|-")
     h.add_argument("--vtu", type=_with_suffix("--vtu", (".vtu",)), metavar="PATH")
     h.add_argument("--plot", type=_with_suffix("--plot", PLOT_SUFFIXES), metavar="PATH")
@@ -89,6 +90,7 @@ def _parser() -> argparse.ArgumentParser:
     t.add_argument("--levels", type=_positive_int("--levels", 1, MAX_LEVELS), nargs="+", default=None)
     t.add_argument("--frictions", type=_nonneg_float("--frictions", positive=True), nargs="+", default=None)
     t.add_argument("--cell", choices=["triangle", "quad"], default="triangle")
+    t.add_argument("--hierarchy", choices=["uniform", "adaptive"], default="uniform")
     t.add_argument("--json", type=_writable, metavar="PATH|-")
     t.add_argument("--plot", type=_with_suffix("--plot", PLOT_SUFFIXES), metavar="PATH")
     t.add_argument("-q", "--quiet", action="store_true")
@@ -125,7 +127,10 @@ def hertz_report(args, problem, result) -> dict:
         "hertz_halfwidth": hertz.halfwidth(load) if load > 0 else None,
         "hertz_peak_pressure": hertz.peak_pressure(load) if load > 0 else None,
         "peak_rss_mb": peak_rss_mb(),
+        "hierarchy": problem.hierarchy.kind,
     }
+    if problem.hierarchy.estimated_error:
+        out["estimated_error"] = [float(e) for e in problem.hierarchy.estimated_error]
     ref = result.extra.get("reference")
     if ref is not None:  # --method linear: the nmg solve that gave the contact state, same process
         out["nmg_cycles"] = ref["cycles"]
@@ -147,7 +152,7 @@ def run_hertz(args) -> int:
     from .hertz import hertz_problem
 
     problem = hertz_problem(args.cell, args.levels, args.friction, coulomb_at_zero=args.method == "fixed-point",
-                            cycle=args.cycle, nu1=args.nu1, nu2=args.nu2)
+                            cycle=args.cycle, nu1=args.nu1, nu2=args.nu2, hierarchy=args.hierarchy)
     result = problem.solve(args.method, tol=args.tol, max_cycles=args.max_cycles)
     report = hertz_report(args, problem, result)
     if args.json:

@@ -1,4 +1,5 @@
-"""Nested mesh hierarchies by uniform refinement, with boundary projection."""
+"""Nested mesh hierarchies by uniform refinement or by adaptive newest-vertex bisection, with
+boundary projection."""
 from __future__ import annotations
 
 import os
@@ -76,6 +77,10 @@ class MeshHierarchy:
     meshes: List[Mesh]
     transfers: List[Transfer] = field(default_factory=list)
     build_seconds: float = 0.0
+    kind: str = "uniform"
+    # adaptive hierarchies: the estimated error (hierarchical estimator, energy norm) of the solution
+    # on each level, coarse to fine
+    estimated_error: List[float] = field(default_factory=list)
 
     @property
     def finest(self) -> Mesh:
@@ -106,16 +111,120 @@ class MeshHierarchy:
         meshes, transfers = [mesh], []
         for _ in range(levels - 1):
             m = meshes[-1]
-            r = _core.refine(m.points, m.cells, m.cell_type, m.facets, m.facet_tags)
-            points = r["points"]
-            nb = r["boundary_nodes"]
-            if projector is not None and len(nb):
-                moved = np.asarray(projector(points[nb], r["boundary_tags"]), dtype=float)
-                if moved.shape != (len(nb), m.dim):
-                    raise ValueError(f"the boundary projector returned shape {moved.shape}, expected {(len(nb), m.dim)}")
-                points[nb] = moved
-            _core.check_cells(points, r["cells"], m.cell_type)
-            fine = Mesh._trusted(points, r["cells"], m.cell_type, r["facets"], r["facet_tags"])
+            fine, t = _refined(m, _core.refine(m.points, m.cells, m.cell_type, m.facets, m.facet_tags), projector)
             meshes.append(fine)
-            transfers.append(Transfer(fine.num_points, m.num_points, r["ptr"], r["parent"], r["weight"]))
+            transfers.append(t)
         return cls(meshes, transfers, time.perf_counter() - t0)
+
+    @classmethod
+    def adaptive(cls, mesh: Mesh, levels: int, problem_factory: Callable[["MeshHierarchy"], object],
+                 projector: Optional[Projector] = None, theta: float = 0.5, solve_options: Optional[dict] = None,
+                 estimate_finest: bool = True, memory_fraction: float = 0.8,
+                 progress: Optional[Callable[[int, "MeshHierarchy", object], None]] = None) -> "MeshHierarchy":
+        """Adaptive refinement of a triangle mesh to `levels` levels in all (level 1 is `mesh`): on
+        each level build the problem with `problem_factory(hierarchy)` (the hierarchy so far; the
+        same description on every level), solve it (`problem.solve(**solve_options)`), estimate
+        the error with the hierarchical estimator (contactmg.estimator), mark the cells of the
+        bulk criterion with parameter `theta` and refine them by newest-vertex bisection with
+        conforming closure; new boundary nodes go through `projector`. The refinement edge of a
+        coarse cell is its longest edge (the coarse cells are rotated to put it first).
+        `estimated_error` holds the estimate of every level (the finest too, unless
+        not estimate_finest). The result is nested like a uniform hierarchy: the same solvers run
+        on it. Adaptivity is for simplices: quadrilateral meshes raise ValueError."""
+        from .estimator import doerfler_mark, estimate
+
+        if mesh.cell_type != "triangle":
+            raise ValueError(f"adaptive refinement is for triangle meshes (newest-vertex bisection); got "
+                             f"{mesh.cell_type} cells: use MeshHierarchy.build for uniform refinement")
+        if isinstance(levels, bool) or not isinstance(levels, (int, np.integer)):
+            raise TypeError(f"levels must be an integer, got {type(levels).__name__}")
+        if levels < 1:
+            raise ValueError(f"levels must be at least 1, got {levels}")
+        if isinstance(theta, bool) or not isinstance(theta, (int, float)) or not 0 < theta <= 1:
+            raise ValueError(f"theta must be a number in (0, 1], got {theta!r}")
+        if not callable(problem_factory):
+            raise TypeError("problem_factory must be a callable hierarchy -> ContactProblem")
+        t0 = time.perf_counter()
+        _core.check_cells(mesh.points, mesh.cells, mesh.cell_type)
+        coarse = Mesh._trusted(mesh.points, longest_edge_first(mesh.points, mesh.cells), mesh.cell_type,
+                               mesh.facets, mesh.facet_tags)
+        h = cls([coarse], [], kind="adaptive")
+        opts = dict(solve_options or {})
+        for level in range(1, levels + 1):
+            if level == levels and not estimate_finest:
+                break
+            m = h.finest
+            need = 4 * m.num_points * _BYTES_PER_NODE[2]
+            have = available_memory_bytes()
+            if need > memory_fraction * have:
+                raise MemoryError(f"estimating level {level} needs about {need / 2**30:.1f} GiB, more than "
+                                  f"{memory_fraction:.0%} of the {have / 2**30:.1f} GiB available")
+            problem = problem_factory(h)
+            result = problem.solve(**opts)
+            if not result.converged:
+                raise RuntimeError(f"adaptive refinement: the solve on level {level} ({m.num_points} nodes) did "
+                                   f"not converge ({result.status}); the estimate would be meaningless")
+            est = estimate(h, problem_factory, result, projector)
+            h.estimated_error.append(est.total)
+            if progress is not None:
+                progress(level, h, result)
+            if level == levels:
+                break
+            marked = doerfler_mark(est.cell_eta2, theta)
+            fine, t = _refined(m, _core.bisect(m.points, m.cells, m.facets, m.facet_tags, marked), projector)
+            h.meshes.append(fine)
+            h.transfers.append(t)
+        h.build_seconds = time.perf_counter() - t0
+        return h
+
+    def truncated(self, levels: int) -> "MeshHierarchy":
+        """The first `levels` levels (coarse to fine) of this hierarchy, sharing its meshes."""
+        if isinstance(levels, bool) or not isinstance(levels, (int, np.integer)) or not 1 <= levels <= self.levels:
+            raise ValueError(f"levels must lie in 1..{self.levels}, got {levels!r}")
+        return MeshHierarchy(self.meshes[:levels], self.transfers[:levels - 1], self.build_seconds, self.kind,
+                             self.estimated_error[:levels])
+
+    def new_nodes(self, level: int) -> np.ndarray:
+        """Nodes that level `level` (an index into meshes; 0 is the coarse mesh) adds to the one below."""
+        self._check_level(level)
+        start = 0 if level == 0 else self.meshes[level - 1].num_points
+        return np.arange(start, self.meshes[level].num_points, dtype=np.int64)
+
+    def changed_nodes(self, level: int) -> np.ndarray:
+        """Nodes whose hat functions on level `level` differ from the level below: the new nodes and
+        their neighbours (every node of a cell that has a new node). Level 0 changes every node.
+        Local smoothing needs only these rows on an adaptive hierarchy (a cycle costs O(n_L))."""
+        self._check_level(level)
+        if level == 0:
+            return np.arange(self.meshes[0].num_points, dtype=np.int64)
+        cells = self.meshes[level].cells
+        n_below = self.meshes[level - 1].num_points
+        touched = cells[np.any(cells >= n_below, axis=1)]
+        return np.unique(touched).astype(np.int64)
+
+    def _check_level(self, level):
+        if isinstance(level, bool) or not isinstance(level, (int, np.integer)) or not 0 <= level < self.levels:
+            raise ValueError(f"level must be an index 0..{self.levels - 1}, got {level!r}")
+
+
+def longest_edge_first(points: np.ndarray, cells: np.ndarray) -> np.ndarray:
+    """Triangles rotated (orientation kept) so that their longest edge joins the first two
+    vertices: the refinement edge of newest-vertex bisection. Ties go to the first edge."""
+    X = points[cells]
+    length = np.linalg.norm(X[:, [1, 2, 0]] - X, axis=2)  # edge a joins vertices a and a+1
+    best = np.argmax(length >= length.max(axis=1, keepdims=True) * (1 - 1e-12), axis=1)
+    return np.ascontiguousarray(np.take_along_axis(cells, (best[:, None] + np.arange(3)) % 3, axis=1))
+
+
+def _refined(m: Mesh, r: dict, projector: Optional[Projector]) -> Tuple[Mesh, Transfer]:
+    """The fine mesh and transfer of a refinement result of the core, boundary nodes projected."""
+    points = r["points"]
+    nb = r["boundary_nodes"]
+    if projector is not None and len(nb):
+        moved = np.asarray(projector(points[nb], r["boundary_tags"]), dtype=float)
+        if moved.shape != (len(nb), m.dim):
+            raise ValueError(f"the boundary projector returned shape {moved.shape}, expected {(len(nb), m.dim)}")
+        points[nb] = moved
+    _core.check_cells(points, r["cells"], m.cell_type)
+    fine = Mesh._trusted(points, r["cells"], m.cell_type, r["facets"], r["facet_tags"])
+    return fine, Transfer(fine.num_points, m.num_points, r["ptr"], r["parent"], r["weight"])

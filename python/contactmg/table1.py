@@ -25,7 +25,8 @@ import time
 from typing import Dict, Sequence
 
 from .checks import VIOLATION_TOL, contact_conditions
-from .hertz import PAPER_FRICTIONS, hertz_problem
+from .hertz import ADAPTIVE_FRICTION, ADAPTIVE_THETA, PAPER_FRICTIONS, hertz_adaptive_hierarchy, hertz_problem
+from .hierarchy import MeshHierarchy
 
 # Measured on 2 cores (triangles, the ten coefficients of the paper): levels 2-7 take about 40 s,
 # levels 2-8 (up to 592,130 dofs, the size of the paper's finest level) 3 minutes (level 9: 23 more).
@@ -39,9 +40,12 @@ _PER_RUN = ("fixed_point_iterations", "fixed_point_vcycles", "fixed_point_status
 
 def table1(levels: Sequence[int] = DEFAULT_LEVELS, frictions: Sequence[float] = PAPER_FRICTIONS,
            cell: str = "triangle", progress: bool = True, tol: float = 1e-11, fixed_point_tol: float = 1e-9,
-           fixed_point_max: int = 100, max_cycles: int = 200) -> Dict:
+           fixed_point_max: int = 100, max_cycles: int = 200, hierarchy="uniform") -> Dict:
     """Runs Algorithm 1 ("fixed-point") and Algorithm 2 ("nmg") for every (friction, level) of the
     Hertz benchmark from u = 0 (tqdm progress bar on standard error unless progress=False).
+    hierarchy: "uniform", "adaptive" (one hierarchy, hertz_adaptive_hierarchy refined for
+    F = ADAPTIVE_FRICTION, for every F; the JSON gains estimated_error per level) or a
+    MeshHierarchy of the half disk with at least max(levels) levels.
     Returns the dict described in the module docstring."""
     from tqdm import tqdm
 
@@ -49,13 +53,29 @@ def table1(levels: Sequence[int] = DEFAULT_LEVELS, frictions: Sequence[float] = 
     levels, frictions = [int(L) for L in levels], [float(F) for F in frictions]
     out = {"problem": "hertz", "cell": cell, "levels": levels, "frictions": frictions, "tol": tol,
            "fixed_point_tol": fixed_point_tol, "fixed_point_max": fixed_point_max, "nodes": [], "dofs": []}
+    full = None
+    if isinstance(hierarchy, MeshHierarchy):
+        full = hierarchy
+    elif hierarchy == "adaptive":
+        full = hertz_adaptive_hierarchy(max(levels), ADAPTIVE_FRICTION, cell=cell)
+        out.update(adaptive_theta=ADAPTIVE_THETA, adaptive_friction=ADAPTIVE_FRICTION)
+    elif hierarchy != "uniform":
+        raise ValueError(f"hierarchy must be 'uniform', 'adaptive' or a MeshHierarchy, got {hierarchy!r}")
+    out["hierarchy"] = "uniform" if full is None else full.kind
+    if full is not None:
+        if max(levels) > full.levels:
+            raise ValueError(f"the hierarchy has {full.levels} levels, fewer than the {max(levels)} asked for")
+        out["hierarchy_seconds"] = full.build_seconds
+        if full.estimated_error:
+            out["estimated_error"] = [float(full.estimated_error[L - 1]) for L in levels]
     rows = {k: [[None] * len(levels) for _ in frictions] for k in _PER_RUN}
     bar = tqdm(total=len(levels) * len(frictions), disable=not progress, desc="table1", unit="run", file=sys.stderr)
     try:
         for j, L in enumerate(levels):
             for i, F in enumerate(frictions):
                 bar.set_postfix(level=L, F=F)
-                p = hertz_problem(cell, L, F, coulomb_at_zero=True)
+                p = hertz_problem(cell, L, F, coulomb_at_zero=True,
+                                  hierarchy="uniform" if full is None else full.truncated(L))
                 out["cycle_type"] = f"{p.cycle}({p.nu1},{p.nu2})"
                 if i == 0:
                     out["nodes"].append(int(p.mesh.num_points))
@@ -140,7 +160,7 @@ def run_table1(args) -> int:
         kw["levels"] = args.levels
     if args.frictions:
         kw["frictions"] = args.frictions
-    table = table1(cell=args.cell, progress=not args.quiet, **kw)
+    table = table1(cell=args.cell, progress=not args.quiet, hierarchy=getattr(args, "hierarchy", "uniform"), **kw)
     if args.json == "-":
         sys.stdout.write(json.dumps(table, indent=1) + "\n")
         sys.stdout.flush()
