@@ -61,7 +61,7 @@ inline RefinedMesh refine_3d(CellType type, const double* points, Index n, const
   const bool hex = type == CellType::Hexahedron;
   const int k = hex ? 8 : 4, kf = hex ? 4 : 3;
   EdgeTable edges(n);
-  QuadFaceTable faces;
+  QuadFaceTable faces, triangles;
   for (Index c = 0; c < m; ++c) {
     const Index* v = cells + c * k;
     if (hex) {
@@ -69,10 +69,13 @@ inline RefinedMesh refine_3d(CellType type, const double* points, Index n, const
       for (auto& f : detail::kHexFaces) faces.add(QuadFaceTable::key(v[f[0]], v[f[1]], v[f[2]], v[f[3]]));
     } else {
       for (auto& e : detail::kTetEdges) edges.add(v[e[0]], v[e[1]]);
+      for (int a = 0; a < 4; ++a)  // the face opposite corner a, padded with -1 (validation only)
+        triangles.add(QuadFaceTable::key(-1, v[(a + 1) % 4], v[(a + 2) % 4], v[(a + 3) % 4]));
     }
   }
   edges.finish();
   faces.finish();
+  triangles.finish();
   const Index ne = edges.size(), nq = faces.size();
   const Index face0 = n + ne, centre0 = n + ne + nq;
   const Index n_fine = n + ne + (hex ? nq + m : 0);
@@ -164,6 +167,8 @@ inline RefinedMesh refine_3d(CellType type, const double* points, Index n, const
         throw InputError("boundary facet " + std::to_string(f) + " is not a face of any cell");
     }
     if (!hex) {
+      if (triangles.find(QuadFaceTable::key(-1, v[0], v[1], v[2])) >= triangles.size())
+        throw InputError("boundary facet " + std::to_string(f) + " is not a face of any cell");
       const Index m01 = mid(v[0], v[1]), m12 = mid(v[1], v[2]), m20 = mid(v[2], v[0]);
       const Index child[4][3] = {{v[0], m01, m20}, {m01, v[1], m12}, {m20, m12, v[2]}, {m01, m12, m20}};
       for (auto& t : child) R.facets.insert(R.facets.end(), t, t + 3);

@@ -53,9 +53,9 @@ class NodalObstacle:
 
 # -- curved obstacles ---------------------------------------------------------------------------
 # Gaps and normals by closest-point projection onto the obstacle surface: n is the unit vector from
-# the node to its closest point (the gradient of the distance), g the signed distance (negative for a
-# node that starts inside the obstacle, with n then pointing out of it, towards the surface the node
-# must go back to). Closest-point rather than the body's own normal because it is defined for every
+# the node to its closest point (the gradient of the distance), g the signed distance. A node that
+# starts inside the obstacle has g < 0 and n pointing on into it, away from its closest point: u . n
+# <= g then moves it back out by at least |g|. Closest-point rather than the body's own normal because it is defined for every
 # node (the body's normal is not, at rims and edges) and because it is the obstacle that resists: in
 # the cork example the body's normal is radial, and only the tilted normal of the conical neck makes
 # an axial push meet resistance. For a node on the surface (g = 0) the surface normal is used.
