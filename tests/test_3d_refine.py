@@ -113,3 +113,13 @@ def test_refinement_rejects_a_facet_that_is_not_a_face():
     hx = box(1, 1, 1, cell="hexahedron")
     with pytest.raises(ValueError, match="not a face"):
         _core.refine(hx.points, hx.cells, "hexahedron", np.array([[0, 1, 6, 7]]), np.array([1]))
+
+
+def test_refined_kuhn_box_is_the_finer_kuhn_box():
+    """Bey's ordering is consistent: refining the Kuhn split of a cube gives the Kuhn split of the
+    8 half-size cubes, tetrahedron for tetrahedron."""
+    f = MeshHierarchy.build(box(1, 1, 1, cell="tetra"), 3).finest
+    s = box(4, 4, 4, cell="tetra")
+    index = {tuple(np.round(p * 4).astype(int)): i for i, p in enumerate(s.points)}
+    to_s = np.array([index[tuple(np.round(p * 4).astype(int))] for p in f.points])
+    assert {frozenset(c) for c in to_s[f.cells].tolist()} == {frozenset(c) for c in s.cells.tolist()}
