@@ -7,7 +7,7 @@ import pytest
 
 from contactmg import cork, read_mesh, sphere
 from contactmg.checks import VIOLATION_TOL, contact_conditions
-from contactmg.friction import Coulomb, Frictionless
+from contactmg.friction import Coulomb, Frictionless, Tresca
 from contactmg.generators_3d import box
 from contactmg.hierarchy import MeshHierarchy
 from contactmg.material import Material
@@ -135,6 +135,32 @@ def test_sphere_with_friction_passes_the_independent_check(cell, F):
     assert c["stick_nodes"] > 0
     # friction holds the centre: it sticks out to a radius inside the contact radius
     assert sphere.radius_of(res, (STICK,)) <= sphere.radius_of(res, (STICK, SLIP))
+
+
+@pytest.mark.parametrize("law", ["tresca", "per-node coulomb"])
+def test_tresca_and_per_node_coefficients_in_3d(law):
+    base = sphere.sphere_problem("hexahedron", 2, 0.4)
+    n = len(base.contact.nodes)
+    r = np.hypot(*base.mesh.points[base.contact.nodes, :2].T)
+    friction = Tresca(5.0) if law == "tresca" else Coulomb(np.where(r < 0.05, 2.0, 0.1))
+    prob = ContactProblem(base.hierarchy, base.material, [Dirichlet([2], (0.0, 0.0, -sphere.DISPLACEMENT))],
+                          contact_tags=[1], obstacle=PlaneObstacle((0.0, 0.0, 0.0), (0.0, 0.0, -1.0)),
+                          friction=friction)
+    res = prob.solve(tol=1e-11)
+    assert res.converged and n > 0
+    viol = contact_conditions(prob, res)
+    assert viol["max"] < VIOLATION_TOL, viol
+    st = np.linalg.norm(res.contact_force[:, 1:], axis=1)
+    if law == "tresca":  # the bound holds everywhere, with equality where the node slides
+        bound = 5.0 * prob.contact.measure
+        assert np.all(st <= bound * (1 + 1e-9))
+        slip = res.contact_state == SLIP
+        assert np.any(slip)
+        np.testing.assert_allclose(st[slip], bound[slip], rtol=1e-8)
+    else:  # the centre (F = 2) sticks, the rim (F = 0.1) of the contact zone slides
+        state = res.contact_state
+        assert np.all(state[(r < 0.05) & (state > 0)] == STICK)
+        assert np.any(state[r >= 0.05] == SLIP)
 
 
 def test_cork_converges_with_stick_and_slip_and_balances_the_push():

@@ -11,9 +11,16 @@ from .obstacle import NodalObstacle, PlaneObstacle
 from .problem import ContactBoundary, ContactProblem, Dirichlet
 from .results import ContactResult
 
+# 3D (issue 10)
+from .generators_3d import (BALL_SURFACE, BALL_TOP, CORK_BOTTOM, CORK_SIDE, CORK_TOP, CylinderProjector,  # noqa: E402
+                            SphereProjector, ball_projector, box, cylinder, half_ball)
+from .obstacle import RevolutionObstacle, SphereObstacle  # noqa: E402
+
 __version__ = "0.1.0"
 
 __all__ = ["Coulomb", "Frictionless", "Tresca", "HERTZ_ARC", "HERTZ_TOP", "CircleProjector", "hertz_half_disk",
            "hertz_projector", "layer", "rectangle", "MeshHierarchy", "Transfer", "read_mesh", "to_meshio",
            "write_mesh", "Material", "Mesh", "NodalObstacle", "PlaneObstacle", "ContactBoundary", "ContactProblem",
-           "Dirichlet", "ContactResult"]
+           "Dirichlet", "ContactResult",
+           "BALL_SURFACE", "BALL_TOP", "CORK_BOTTOM", "CORK_SIDE", "CORK_TOP", "CylinderProjector", "SphereProjector",
+           "ball_projector", "box", "cylinder", "half_ball", "RevolutionObstacle", "SphereObstacle"]
