@@ -69,8 +69,8 @@ def face_states(facets: np.ndarray, node_state: np.ndarray) -> np.ndarray:
 def plot_cork(problem, result, ax=None, scale: Optional[float] = None, neck=None, z_range=None):
     """The deformed cork, its boundary faces coloured by contact state (stick green, slip orange,
     free grey), the neck's wall drawn transparent. `scale` magnifies the displacement (default:
-    the largest displacement drawn as 3 % of the cork's size). Returns the axes; the faces are in
-    one collection per state present (labels "free", "slip", "stick"), coloured by `face_states`."""
+    the largest displacement drawn as 3 % of the cork's size). Returns the axes; the faces are the
+    collection labelled "cork", coloured by `face_states`."""
     import matplotlib.colors as mcolors
     from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
@@ -88,13 +88,11 @@ def plot_cork(problem, result, ax=None, scale: Optional[float] = None, neck=None
     Y = X + scale * result.displacement
     facets = mesh.facets
     states = face_states(facets, result.node_state)
-    # one collection per state (matplotlib sorts the faces of a collection by depth when drawing)
-    for state, name in ((FREE, "free"), (SLIP, "slip"), (STICK, "stick")):
-        sel = states == state
-        if np.any(sel):
-            poly = Poly3DCollection(Y[facets[sel]], facecolors=mcolors.to_rgba(STATE_COLORS[state]),
-                                    edgecolors=(0, 0, 0, 0.25), linewidths=0.2, label=name)
-            ax.add_collection3d(poly)
+    # one collection, so that matplotlib sorts all faces by depth together (separate collections
+    # are stacked whole, and the bottom face would hide the side)
+    colors = np.array([mcolors.to_rgba(STATE_COLORS[int(s)]) for s in states]).reshape(-1, 4)
+    poly = Poly3DCollection(Y[facets], facecolors=colors, edgecolors=(0, 0, 0, 0.25), linewidths=0.2, label="cork")
+    ax.add_collection3d(poly)
     if neck is not None:
         zlo, zhi = z_range if z_range is not None else (X[:, 2].min() - 0.1 * size, X[:, 2].max() + 0.1 * size)
         z = np.linspace(zlo, zhi, 30)
