@@ -7,7 +7,7 @@ import pytest
 
 from contactmg import cork, read_mesh, sphere
 from contactmg.checks import VIOLATION_TOL, contact_conditions
-from contactmg.friction import Coulomb, Frictionless, Tresca
+from contactmg.friction import Coulomb, Tresca
 from contactmg.generators_3d import box
 from contactmg.hierarchy import MeshHierarchy
 from contactmg.material import Material

@@ -2,7 +2,6 @@
 manufactured solution's convergence rates under 3D refinement."""
 import numpy as np
 import pytest
-import scipy.sparse as sp
 
 from contactmg import _core
 from contactmg.generators_3d import box
@@ -143,6 +142,5 @@ def test_manufactured_solution_converges_at_order_h_in_energy_and_h2_in_L2():
         errors.append(_tet_errors(prob.mesh, res.displacement, u, grad, MAT))
     errors = np.array(errors)
     rates = np.log2(errors[:-1] / errors[1:])
-    print("rates", rates)
     assert np.all(rates[:, 0] > 0.85), rates   # energy: O(h)
     assert np.all(rates[:, 1] > 1.7), rates    # L2: O(h^2)
