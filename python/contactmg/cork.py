@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import math
 
-
 from .friction import Coulomb, Frictionless
 from .generators_3d import CORK_SIDE, CORK_TOP, CylinderProjector, cylinder
 from .hierarchy import MeshHierarchy
