@@ -169,21 +169,22 @@ def _block_ring_half_ball(radius: float, k: int, ring_layers: int, inner: float)
     return P, _orient_hexes(P, np.array(hexes, dtype=np.int64))
 
 
-def half_ball(cell: str = "hexahedron", center=(0.0, 0.0, 0.4), radius: float = 0.4, k: int = 2,
+def half_ball(cell: str = "hexahedron", center=(0.0, 0.0, 0.4), radius: float = 0.4, k: int = 3,
               ring_layers: int = 2, inner: float = 0.5, tet_split: int = 12) -> Mesh:
     """The lower half of the ball (center, radius) with its flat top z = center_z, the body of the
     Hertz sphere. Hexahedra: a block of 2k x 2k x k cubes under the centre and ring_layers layers out
-    to the sphere (128 cells, 189 nodes by default); tetrahedra: each of those hexahedra cut
-    into 12 (tet_split=12: a centre node each, 1536 cells, 317 nodes) or 24 (also a node at every
-    face centre). Measured on the contact problem (F = 0.4, levels 2 and 3): 23 and 38 cycles for
-    the 12-split, 22 and 37 for the 24-split, 19 and 30 for the 24-split of the k = 1 mesh;
-    ordering the coarse tetrahedra for Bey's shortest diagonal changed nothing. A node sits at
-    the bottom point. Tags: BALL_SURFACE on the sphere, BALL_TOP on the top. Refine with
-    `ball_projector`."""
+    to the sphere (k = 3: 324 cells, 438 nodes); tetrahedra: each of those hexahedra cut into 12
+    (tet_split=12: a centre node each; 3888 cells, 762 nodes) or 24 (also a node at every face
+    centre). Chosen by the measured cycle counts of the contact problem (F = 0.4, tol 1e-11):
+    hexahedra k = 3: 11, 14, 15 cycles on levels 2, 3, 4; k = 2: 16, 22, 26; k = 4: 12, 14 (levels
+    2, 3); k = 3 with 3 ring layers: 16, 22. Tetrahedra k = 3: 20, 28; k = 2: 23, 38 (24-split: 22,
+    37). A finer coarse mesh that resolves the contact zone helps more than cell shape here. A node
+    sits at the bottom point. Tags: BALL_SURFACE on the sphere, BALL_TOP on the top. Refine with
+    `ball_projector`. The block's corners must stay inside the ball (inner < 1/sqrt(3))."""
     if cell not in ("tetra", "hexahedron"):
         raise ValueError(f"cell must be 'tetra' or 'hexahedron', got {cell!r}")
-    if k < 1 or ring_layers < 1 or not (0 < inner < 1) or not radius > 0:
-        raise ValueError("need k >= 1, ring_layers >= 1, 0 < inner < 1 and radius > 0")
+    if k < 1 or ring_layers < 1 or not (0 < inner < 3 ** -0.5) or not radius > 0:
+        raise ValueError("need k >= 1, ring_layers >= 1, 0 < inner < 1/sqrt(3) and radius > 0")
     P, hexes = _block_ring_half_ball(radius, k, ring_layers, inner)
     if tet_split not in (12, 24):
         raise ValueError(f"tet_split must be 12 or 24, got {tet_split!r}")

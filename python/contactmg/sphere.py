@@ -16,10 +16,17 @@ from .problem import ContactProblem, Dirichlet
 
 E, NU = 2000.0, 0.28
 CENTER, RADIUS = (0.0, 0.0, 0.4), 0.4
-# The approach for a contact radius of about 0.1 (4 elements of the default level 3 across it):
+# The approach for a contact radius of about 0.1 (6 elements of the default level 3 across it):
 # Hertz's a^2 / R is 0.025; the ball's own compression above the contact takes part of D.
 DISPLACEMENT = 0.02
 DEFAULT_LEVELS = 3
+# the coarse mesh: a block of 2K x 2K x K cubes of half-width INNER * R, two ring layers
+K, INNER = 3, 0.5
+
+
+def element_width(levels: int) -> float:
+    """The width of the cells at the bottom of the ball on the finest of `levels` levels."""
+    return INNER * RADIUS / K / 2 ** (levels - 1)
 
 
 def sphere_problem(cell: str = "hexahedron", levels: int = DEFAULT_LEVELS, friction: float = 0.4,
@@ -32,7 +39,7 @@ def sphere_problem(cell: str = "hexahedron", levels: int = DEFAULT_LEVELS, frict
     if isinstance(displacement, bool) or not isinstance(displacement, (int, float)) or not math.isfinite(displacement) \
             or not 0 < displacement < 0.25 * RADIUS:
         raise ValueError(f"the displacement D must lie in (0, {0.25 * RADIUS}) (small deformations), got {displacement!r}")
-    mesh = half_ball(cell, CENTER, RADIUS)
+    mesh = half_ball(cell, CENTER, RADIUS, k=K, inner=INNER)
     hierarchy = MeshHierarchy.build(mesh, levels, projector=ball_projector(CENTER, RADIUS))
     law = Coulomb(friction) if (friction > 0 or coulomb_at_zero) else Frictionless()
     return ContactProblem(hierarchy, material or Material(E, NU), [Dirichlet([BALL_TOP], (0.0, 0.0, -displacement))],
