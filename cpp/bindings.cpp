@@ -7,6 +7,7 @@
 #include "contact_solver.hpp"
 #include "fem/bisection.hpp"
 #include "refinement.hpp"
+#include "fem/refine_3d.hpp"
 
 namespace py = pybind11;
 using namespace cmg;
@@ -342,19 +343,22 @@ PYBIND11_MODULE(_core, m) {
 
   m.def("refine", [](DArr points, IArr cells, const std::string& cell_type, IArr facets, IArr facet_tags) {
     MeshView v = view(points, cells, cell_type);
-    if (v.d != 2) throw InputError("uniform refinement of 3D meshes is not implemented yet");
-    require_shape(facets, "facets", {-1, 2});
+    const int kf = v.d == 2 ? 2 : (v.type == CellType::Tetra ? 3 : 4);
+    require_shape(facets, "facets", {-1, kf});
     require_shape(facet_tags, "facet_tags", {facets.shape(0)});
+    for (Index i = 0; i < (Index)facets.size(); ++i)
+      if (facets.data()[i] < 0 || facets.data()[i] >= v.n) throw InputError("a facet refers to a node out of range");
     RefinedMesh R;
     {
       py::gil_scoped_release r;
-      R = refine_2d(v.type, v.X, v.n, v.C, v.m, facets.data(), facet_tags.data(), facets.shape(0));
+      R = v.d == 2 ? refine_2d(v.type, v.X, v.n, v.C, v.m, facets.data(), facet_tags.data(), facets.shape(0))
+                   : refine_3d(v.type, v.X, v.n, v.C, v.m, facets.data(), facet_tags.data(), facets.shape(0));
     }
     const py::ssize_t nf = R.points.size() / v.d;
     py::dict out;
     out["points"] = to_numpy(R.points, {nf, v.d});
     out["cells"] = to_numpy(R.cells, {(py::ssize_t)R.cells.size() / v.k, v.k});
-    out["facets"] = to_numpy(R.facets, {(py::ssize_t)R.facets.size() / 2, 2});
+    out["facets"] = to_numpy(R.facets, {(py::ssize_t)R.facets.size() / kf, kf});
     out["facet_tags"] = to_numpy(R.facet_tags, {(py::ssize_t)R.facet_tags.size()});
     out["ptr"] = to_numpy(R.ptr, {(py::ssize_t)R.ptr.size()});
     out["parent"] = to_numpy(R.parent, {(py::ssize_t)R.parent.size()});

@@ -12,10 +12,17 @@ from .obstacle import NodalObstacle, PlaneObstacle
 from .problem import ContactBoundary, ContactProblem, CycleOptions, Dirichlet
 from .results import ContactResult
 
+# 3D (issue 10)
+from .generators_3d import (BALL_SURFACE, BALL_TOP, CORK_BOTTOM, CORK_SIDE, CORK_TOP, CylinderProjector,  # noqa: E402
+                            SphereProjector, ball_projector, box, cylinder, half_ball)
+from .obstacle import RevolutionObstacle, SphereObstacle  # noqa: E402
+
 __version__ = "0.1.0"
 
 __all__ = ["Coulomb", "Frictionless", "Tresca", "contact_frames", "HERTZ_ARC", "HERTZ_TOP", "RECT_BOTTOM",
            "RECT_LEFT", "RECT_RIGHT", "RECT_TOP", "CircleProjector", "hertz_half_disk", "hertz_projector",
            "rectangle", "MeshHierarchy", "Transfer", "read_mesh", "to_meshio", "write_mesh", "Material", "Mesh",
            "NodalObstacle", "PlaneObstacle", "ContactBoundary", "ContactProblem", "CycleOptions", "Dirichlet",
-           "ContactResult"]
+           "ContactResult",
+           "BALL_SURFACE", "BALL_TOP", "CORK_BOTTOM", "CORK_SIDE", "CORK_TOP", "CylinderProjector", "SphereProjector",
+           "ball_projector", "box", "cylinder", "half_ball", "RevolutionObstacle", "SphereObstacle"]

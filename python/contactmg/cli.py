@@ -1,4 +1,4 @@
-"""Command line: `contactmg hertz` and `contactmg table1` (DESIGN section 9)."""
+"""Command line: `contactmg hertz`, `contactmg table1` and the 3D `sphere` and `cork` (cli_3d.py; DESIGN section 9)."""
 from __future__ import annotations
 
 import argparse
@@ -94,6 +94,8 @@ def _parser() -> argparse.ArgumentParser:
     t.add_argument("--json", type=_writable, metavar="PATH|-")
     t.add_argument("--plot", type=_with_suffix("--plot", PLOT_SUFFIXES), metavar="PATH")
     t.add_argument("-q", "--quiet", action="store_true")
+    from . import cli_3d
+    cli_3d.add_parsers(sub)
     return p
 
 
@@ -187,6 +189,9 @@ def main(argv: Optional[List[str]] = None) -> int:
     try:
         if args.command == "hertz":
             return run_hertz(args)
+        from .cli_3d import COMMANDS
+        if args.command in COMMANDS:
+            return COMMANDS[args.command](args)
         from .table1 import run_table1
         return run_table1(args)
     except (ValueError, TypeError, MemoryError) as e:

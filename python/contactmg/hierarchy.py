@@ -51,19 +51,36 @@ def available_memory_bytes() -> int:
     return int(os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES"))
 
 
+def _unique_count(cells: np.ndarray, local) -> int:
+    sub = np.sort(cells[:, np.array(local)].reshape(-1, len(local[0])), axis=1)
+    return len(np.unique(sub, axis=0))
+
+
 def estimate_nodes(mesh: Mesh, levels: int) -> int:
-    """Nodes of the finest level after levels - 1 uniform refinements (exact in 2D)."""
+    """Nodes of the finest level after levels - 1 uniform refinements (exact)."""
     k = mesh.cells.shape[1]
+    n, m = mesh.num_points, mesh.num_cells
     if mesh.dim == 2:
         e = np.sort(np.stack([mesh.cells, np.roll(mesh.cells, -1, axis=1)], -1).reshape(-1, 2), axis=1)
-        n, e, m = mesh.num_points, len(np.unique(e, axis=0)), mesh.num_cells
+        e = len(np.unique(e, axis=0))
         for _ in range(levels - 1):
             if k == 3:
                 n, e, m = n + e, 2 * e + 3 * m, 4 * m
             else:
                 n, e, m = n + e + m, 2 * e + 4 * m, 4 * m
         return int(n)
-    return int(mesh.num_points + mesh.num_cells * (8 ** (levels - 1)) * (1.0 if k == 8 else 0.2))
+    if k == 4:  # tetrahedra (red): a face gets 3 inner edges, a cell 1 edge (the diagonal) and 8 faces
+        e = _unique_count(mesh.cells, [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)])
+        f = _unique_count(mesh.cells, [(0, 1, 2), (0, 1, 3), (0, 2, 3), (1, 2, 3)])
+        for _ in range(levels - 1):
+            n, e, f, m = n + e, 2 * e + 3 * f + m, 4 * f + 8 * m, 8 * m
+    else:  # hexahedra: a face gets a centre and 4 half edges, a cell a centre, 6 edges and 12 faces
+        e = _unique_count(mesh.cells, [(0, 1), (1, 2), (2, 3), (3, 0), (4, 5), (5, 6), (6, 7), (7, 4),
+                                       (0, 4), (1, 5), (2, 6), (3, 7)])
+        f = _unique_count(mesh.cells, [(0, 3, 2, 1), (4, 5, 6, 7), (0, 1, 5, 4), (1, 2, 6, 5), (2, 3, 7, 6), (3, 0, 4, 7)])
+        for _ in range(levels - 1):
+            n, e, f, m = n + e + f + m, 2 * e + 4 * f + 6 * m, 4 * f + 12 * m, 8 * m
+    return int(n)
 
 
 def estimate_memory_bytes(mesh: Mesh, levels: int) -> int:

@@ -1,0 +1,142 @@
+"""The 3D commands `contactmg sphere` and `contactmg cork` (DESIGN sections 9 and 10), registered by
+cli.py; the JSON keys of `contactmg hertz` plus their own."""
+from __future__ import annotations
+
+import sys
+
+from . import cli
+
+PLOT_SUFFIXES = cli.PLOT_SUFFIXES
+MAX_LEVELS_3D = 7
+
+
+def _common(p, levels_default):
+    p.add_argument("--levels", type=cli._positive_int("--levels", 1, MAX_LEVELS_3D), default=levels_default,
+                   help="levels in all; level 1 is the coarse mesh")
+    p.add_argument("--friction", type=cli._nonneg_float("--friction"), default=0.4)
+    p.add_argument("--method", choices=["nmg", "fixed-point", "linear"], default="nmg")
+    p.add_argument("--tol", type=cli._nonneg_float("--tol", positive=True), default=1e-11)
+    p.add_argument("--max-cycles", type=cli._positive_int("--max-cycles"), default=200)
+    p.add_argument("--cycle", choices=["V", "W", "F"], default="F")
+    p.add_argument("--nu1", type=cli._positive_int("--nu1", 0, 100), default=3)
+    p.add_argument("--nu2", type=cli._positive_int("--nu2", 0, 100), default=3)
+    p.add_argument("--json", type=cli._writable, metavar="PATH|-")
+    p.add_argument("--vtu", type=cli._with_suffix("--vtu", (".vtu",)), metavar="PATH")
+    p.add_argument("-q", "--quiet", action="store_true")
+
+
+def add_parsers(sub) -> None:
+    from . import cork, sphere
+
+    s = sub.add_parser("sphere", help="the Hertz sphere: a half ball pressed onto a rigid plane (3D)")
+    s.add_argument("--cell", choices=["tetra", "hexahedron"], default="hexahedron")
+    _common(s, sphere.DEFAULT_LEVELS)
+    s.add_argument("--displacement", type=cli._nonneg_float("--displacement", positive=True), default=sphere.DISPLACEMENT)
+    s.add_argument("--plot", type=cli._with_suffix("--plot", PLOT_SUFFIXES), metavar="PATH")
+    c = sub.add_parser("cork", help="the cork pushed into a narrowing bottle neck (3D, Figure 2 right)")
+    _common(c, cork.DEFAULT_LEVELS)
+    c.add_argument("--push", type=cli._nonneg_float("--push"), default=cork.PUSH)
+    c.add_argument("--picture", type=cli._with_suffix("--picture", PLOT_SUFFIXES), metavar="PATH")
+
+
+def _report(args, problem, result, name) -> dict:
+    """The keys of `contactmg hertz`, in 3D: the half-widths are radii about the z axis."""
+    from . import sphere
+
+    out = cli.hertz_report(args, problem, result)
+    for k in ("hertz_halfwidth", "hertz_peak_pressure"):
+        out.pop(k, None)
+    out["problem"] = name
+    out["contact_radius"] = sphere.radius_of(result, (1, 2))
+    out["stick_radius"] = sphere.radius_of(result, (1,))
+    out["contact_halfwidth"], out["stick_halfwidth"] = out["contact_radius"], out["stick_radius"]
+    return out
+
+
+def _save(fig, path):
+    import matplotlib.pyplot as plt
+
+    fig.tight_layout()
+    fig.savefig(path, dpi=150)
+    plt.close(fig)
+
+
+def _finish(args, report, result, label) -> int:
+    if args.json:
+        cli._emit_json(args.json, report)
+    if args.vtu:
+        result.write_vtu(args.vtu)
+    if not args.quiet:
+        stream = sys.stderr if args.json == "-" else sys.stdout
+        print(f"{label} levels={args.levels} dofs={report['dofs']} F={args.friction} method={args.method}: "
+              f"{result.status}, {result.cycles} cycles"
+              + (f", {result.outer_iterations} outer iterations" if result.outer_iterations is not None else "")
+              + f", setup {result.setup_seconds:.2f} s, solve {result.solve_seconds:.2f} s, "
+              f"contact {report['contact_nodes']} (stick {report['stick_nodes']}, slip {report['slip_nodes']})", file=stream)
+    return cli.EXIT_OK if result.converged else cli.EXIT_NO_CONVERGENCE
+
+
+def run_sphere(args) -> int:
+    from . import sphere
+
+    problem = sphere.sphere_problem(args.cell, args.levels, args.friction, args.displacement,
+                                    coulomb_at_zero=args.method == "fixed-point", cycle=args.cycle, nu1=args.nu1,
+                                    nu2=args.nu2)
+    result = problem.solve(args.method, tol=args.tol, max_cycles=args.max_cycles)
+    report = _report(args, problem, result, "sphere")
+    load = float(result.reaction[2])
+    report["displacement"] = args.displacement
+    report["hertz_radius"] = sphere.hertz_radius(load) if load > 0 else None
+    report["hertz_p0"] = sphere.hertz_p0(load) if load > 0 else None
+    report["central_pressure"] = sphere.central_pressure(result) if len(result.contact_nodes) else None
+    if args.plot:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        from .plots_3d import plot_radial_stress
+
+        fig, ax = plt.subplots(figsize=(7, 4))
+        hz = {"radius": report["hertz_radius"], "p0": report["hertz_p0"]} if load > 0 else None
+        plot_radial_stress(result, ax=ax, hertz=hz)
+        ax.set_title(f"Hertz sphere, {args.cell}, level {args.levels}, F = {args.friction}", fontsize=9)
+        _save(fig, args.plot)
+    label = f"sphere {args.cell}"
+    code = _finish(args, report, result, label)
+    if not args.quiet and report["hertz_radius"]:
+        stream = sys.stderr if args.json == "-" else sys.stdout
+        print(f"  load {load:.6g}, contact radius {report['contact_radius']:.4g} (Hertz {report['hertz_radius']:.4g}), "
+              f"central pressure {report['central_pressure']:.4g} (Hertz p0 {report['hertz_p0']:.4g})", file=stream)
+    return code
+
+
+def run_cork(args) -> int:
+    from . import cork
+
+    args.cell = "hexahedron"
+    problem = cork.cork_problem(args.levels, args.friction, args.push, coulomb_at_zero=args.method == "fixed-point",
+                                cycle=args.cycle, nu1=args.nu1, nu2=args.nu2)
+    result = problem.solve(args.method, tol=args.tol, max_cycles=args.max_cycles)
+    report = _report(args, problem, result, "cork")
+    report["push"] = args.push
+    report["push_force"] = cork.push_force(problem, result)
+    report["material"] = {"E": problem.material.E, "nu": problem.material.nu}
+    if args.picture:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        from .plots_3d import plot_cork
+
+        fig = plt.figure(figsize=(6, 7))
+        ax = fig.add_subplot(projection="3d")
+        plot_cork(problem, result, ax=ax, neck=cork.neck())
+        _save(fig, args.picture)
+    code = _finish(args, report, result, "cork")
+    if not args.quiet:
+        stream = sys.stderr if args.json == "-" else sys.stdout
+        print(f"  push force {report['push_force']:.6g} N for D = {args.push} mm", file=stream)
+    return code
+
+
+COMMANDS = {"sphere": run_sphere, "cork": run_cork}

@@ -1,0 +1,127 @@
+"""The 3D commands `contactmg sphere` and `contactmg cork` (DESIGN sections 9 and 10): JSON keys,
+exit statuses, the plots drawn from the right data."""
+import json
+import subprocess
+import sys
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+
+from contactmg import cork, sphere  # noqa: E402
+from contactmg.cli import main  # noqa: E402
+from contactmg.plots_3d import (FREE_COLOR, SLIP_COLOR, STICK_COLOR, face_states, plot_cork,  # noqa: E402
+                                plot_radial_stress, radial_stress_data)
+from contactmg.results import FREE, SLIP, STICK  # noqa: E402
+
+KEYS = ["problem", "dim", "cell", "levels", "nodes", "dofs", "method", "friction", "tol", "converged", "cycles",
+        "outer_iterations", "setup_seconds", "solve_seconds", "history", "contact_nodes", "stick_nodes", "slip_nodes",
+        "contact_halfwidth", "stick_halfwidth", "reaction", "max_normal_stress", "peak_rss_mb"]
+
+
+def run(*args, timeout=300, cwd=None):
+    return subprocess.run([sys.executable, "-m", "contactmg", *args], capture_output=True, text=True, timeout=timeout,
+                          cwd=cwd)
+
+
+def test_sphere_json_has_the_hertz_keys_and_the_hertz_formulas(tmp_path, capsys):
+    out = tmp_path / "s.json"
+    plot = tmp_path / "s.png"
+    vtu = tmp_path / "s.vtu"
+    assert main(["sphere", "--levels", "2", "--friction", "0.1", "--json", str(out), "--plot", str(plot),
+                 "--vtu", str(vtu), "-q"]) == 0
+    d = json.loads(out.read_text())
+    for k in KEYS + ["contact_radius", "stick_radius", "hertz_radius", "hertz_p0"]:
+        assert k in d, k
+    assert d["problem"] == "sphere" and d["dim"] == 3 and d["cell"] == "hexahedron" and d["converged"]
+    assert len(d["reaction"]) == 3 and d["dofs"] == 3 * d["nodes"]
+    P = d["reaction"][2]
+    assert d["hertz_radius"] == pytest.approx((3 * P * 0.4 / (4 * 2000 / (1 - 0.28 ** 2))) ** (1 / 3), rel=1e-12)
+    assert d["hertz_p0"] == pytest.approx(3 * P / (2 * np.pi * d["hertz_radius"] ** 2), rel=1e-12)
+    assert d["stick_nodes"] >= 1 and 0 <= d["stick_radius"] <= d["contact_radius"]
+    assert d["stick_nodes"] + d["slip_nodes"] == d["contact_nodes"]
+    assert plot.stat().st_size > 10000 and vtu.stat().st_size > 10000
+    import meshio
+
+    m = meshio.read(vtu)
+    assert set(m.point_data) >= {"displacement", "normal_stress", "tangential_stress", "node_state"}
+    ts = m.point_data["tangential_stress"]  # two tangential components (VTK may pad them to 3)
+    assert ts.shape[0] == len(m.points) and ts.shape[1] in (2, 3) and np.all(ts[:, 2:] == 0)
+
+
+def test_sphere_linear_reference_and_tetra(tmp_path):
+    r = run("sphere", "--cell", "tetra", "--levels", "2", "--method", "linear", "--json", "-", "-q", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    d = json.loads(r.stdout)
+    assert d["cell"] == "tetra" and d["nmg_cycles"] >= 5
+    assert d["nmg_over_linear"] == pytest.approx(d["nmg_solve_seconds"] / d["solve_seconds"])
+
+
+@pytest.mark.parametrize("args,word", [
+    (["sphere", "--cell", "triangle"], "cell"), (["sphere", "--levels", "0"], "levels"),
+    (["sphere", "--displacement", "-1"], "displacement"), (["sphere", "--displacement", "0.3"], "displacement"),
+    (["cork", "--push", "nan"], "push"), (["cork", "--push", "9"], "push"), (["cork", "--picture", "c.bmp"], "--picture"),
+    (["cork", "--friction", "-1"], "friction"),
+])
+def test_bad_3d_arguments_exit_2_with_one_line(args, word, tmp_path):
+    r = run(*args, "-q", cwd=tmp_path)
+    assert r.returncode == 2 and "Traceback" not in r.stderr, r.stderr
+    assert word in r.stderr.strip().splitlines()[-1]
+
+
+def test_no_convergence_exits_3_and_still_writes_json(tmp_path):
+    out = tmp_path / "c.json"
+    assert main(["cork", "--levels", "2", "--max-cycles", "2", "--json", str(out), "-q"]) == 3
+    d = json.loads(out.read_text())
+    assert d["converged"] is False and d["cycles"] == 2
+
+
+def test_cork_json_and_picture(tmp_path):
+    out, pic = tmp_path / "c.json", tmp_path / "c.png"
+    assert main(["cork", "--levels", "2", "--json", str(out), "--picture", str(pic), "-q"]) == 0
+    d = json.loads(out.read_text())
+    for k in KEYS + ["push_force"]:
+        assert k in d, k
+    assert d["problem"] == "cork" and d["converged"] and d["stick_nodes"] > 0 and d["slip_nodes"] > 0
+    assert d["push_force"] == pytest.approx(d["reaction"][2], rel=1e-8)
+    assert pic.stat().st_size > 20000
+
+
+def test_cork_picture_is_drawn_from_the_node_states():
+    prob = cork.cork_problem(2, 0.4)
+    res = prob.solve(tol=1e-10)
+    fig = plt.figure()
+    ax = fig.add_subplot(projection="3d")
+    plot_cork(prob, res, ax=ax, neck=cork.neck())
+    facets = res.mesh.facets
+    expect = face_states(facets, res.node_state)
+    # independent of face_states: a face is stick/slip exactly when all its nodes are in contact
+    s = res.node_state[facets]
+    assert np.array_equal(expect == STICK, np.all(s == STICK, axis=1))
+    assert np.array_equal(expect == SLIP, np.all(s > 0, axis=1) & np.any(s == SLIP, axis=1))
+    assert {STICK, SLIP, FREE} <= set(expect.tolist())
+    fig.canvas.draw()
+    (poly,) = [c for c in ax.collections if c.get_label() == "cork"]
+    fc = poly.get_facecolor()  # sorted by depth when drawn: compare the colours as a multiset
+    assert len(fc) == len(facets)
+    for state, color in ((STICK, STICK_COLOR), (SLIP, SLIP_COLOR), (FREE, FREE_COLOR)):
+        drawn = np.all(np.isclose(fc, matplotlib.colors.to_rgba(color)), axis=1).sum()
+        assert drawn == np.sum(expect == state), (state, drawn)
+    plt.close(fig)
+
+
+def test_radial_stress_plot_data():
+    prob = sphere.sphere_problem("hexahedron", 2, 0.1)
+    res = prob.solve(tol=1e-11)
+    d = radial_stress_data(res)
+    x = res.mesh.points[res.contact_nodes[d["index"]]]
+    np.testing.assert_allclose(d["r"], np.hypot(x[:, 0], x[:, 1]))
+    assert np.all(np.diff(d["r"]) >= 0)
+    np.testing.assert_allclose(d["normal"], res.normal_stress[d["index"]])
+    ax = plot_radial_stress(res, hertz={"radius": 0.1, "p0": 300.0})
+    pressure = ax.lines[0].get_ydata()
+    np.testing.assert_allclose(pressure, -res.normal_stress[d["index"]])
+    plt.close(ax.figure)
