@@ -59,7 +59,7 @@ class ContactProblem {
       }
       if (frame_fixed)
         for (int a = 0; a < d; ++a)
-          if (frame_fixed[c * d + a]) {
+          if (frame_fixed[c * d + a] && !fixed_[i * d + a]) {  // a Dirichlet component keeps its own value
             if (!std::isfinite(frame_values[c * d + a])) throw InputError("a Dirichlet value is not finite");
             fixed_[i * d + a] = 1;
             values[i * d + a] = frame_values[c * d + a];

@@ -152,21 +152,27 @@ class ContactProblem:
         if not np.any(sel):
             raise ValueError(f"no boundary facet carries the contact tags {list(tags)}")
         nodes = np.unique(mesh.facets[sel])
-        # Dirichlet wins where both apply (e.g. the ends of the Hertz arc on the clamped top edge)
-        nodes = nodes[~self.fixed[nodes].any(axis=1)]
+        # Dirichlet wins where it fixes every component (e.g. the ends of the Hertz arc on the clamped top edge)
+        nodes = nodes[~self.fixed[nodes].all(axis=1)]
+        gaps, normals = obstacle.gaps_and_normals(mesh.points[nodes])
+        # A node with some fixed components keeps its contact condition in the free directions; one
+        # whose normal component is prescribed is no contact node (the core checks it is admissible
+        # and refuses a fixed component that is neither normal nor tangential)
+        classify = _core.classify_contact_dirichlet_2D if d == 2 else _core.classify_contact_dirichlet_3D
+        keep = classify(nodes.astype(np.int64), self.fixed[nodes], self.fixed_values[nodes],
+                        np.asarray(normals, float), np.asarray(gaps, float)) < 2
+        nodes, gaps, normals = nodes[keep], np.asarray(gaps)[keep], np.asarray(normals)[keep]
         ones = np.ones((mesh.num_points, 1))
         measure = _core.assemble_facet_load(mesh.points, mesh.facets[sel], ones)[nodes, 0]
-        gaps, normals = obstacle.gaps_and_normals(mesh.points[nodes])
         return ContactBoundary(nodes.astype(np.int64), np.ascontiguousarray(normals), np.ascontiguousarray(gaps), measure)
 
-    def _make_solver(self, law: str, fixed=None, fixed_values=None, load=None):
+    def _make_solver(self, law: str, frame_fixed=None, frame_values=None, load=None):
         d = self.mesh.dim
         cls = _core.ContactSolver2D if d == 2 else _core.ContactSolver3D
         c = self.contact
-        return cls(self.A, self.load if load is None else load, self.fixed if fixed is None else fixed,
-                   self.fixed_values if fixed_values is None else fixed_values, c.nodes, c.normals, c.gaps,
-                   self.coefficients, law, [t.as_tuple() for t in self.hierarchy.transfers], self.cycle,
-                   self.nu1, self.nu2)
+        return cls(self.A, self.load if load is None else load, self.fixed, self.fixed_values, c.nodes, c.normals,
+                   c.gaps, self.coefficients, law, [t.as_tuple() for t in self.hierarchy.transfers], self.cycle,
+                   self.nu1, self.nu2, frame_fixed=frame_fixed, frame_values=frame_values)
 
     @property
     def law(self) -> str:
@@ -230,16 +236,17 @@ class ContactProblem:
         """Linear problem with the final contact state of `ref`: active normals fixed on the gap,
         sticking tangentials fixed at zero, sliding nodes loaded with their friction force."""
         c = self.contact
-        fixed, values, load = self.fixed.copy(), self.fixed_values.copy(), self.load.copy()
+        # components fixed in the contact frames (a Dirichlet component keeps its own value)
+        fixed, values, load = np.zeros((len(c.nodes), self.mesh.dim), np.uint8), np.zeros((len(c.nodes), self.mesh.dim)), self.load.copy()
         state = ref.node_state[c.nodes]
         active = state > 0
-        fixed[c.nodes[active], 0] = 1
-        values[c.nodes[active], 0] = c.gaps[active]
+        fixed[active, 0] = 1
+        values[active, 0] = c.gaps[active]
         stick = state == 1
-        fixed[c.nodes[stick], 1:] = 1
-        values[c.nodes[stick], 1:] = 0.0
+        fixed[stick, 1:] = 1
+        values[stick, 1:] = 0.0
         slip = state == 2
-        frames = _frames(c.normals)
+        frames = self.solver.frames
         s_local = np.zeros_like(ref.contact_force)
         s_local[slip, 1:] = ref.contact_force[slip, 1:]
         load[c.nodes] += np.einsum("cij,cj->ci", frames, s_local)
@@ -247,7 +254,7 @@ class ContactProblem:
 
     def _contact_outputs_linear(self, raw, ref):
         # the linear reference knows no contact law; report the contact forces it produced
-        frames = _frames(self.contact.normals)
+        frames = self.solver.frames
         u = raw["u"]
         f = self.A.matvec(u) - self.load
         cf = np.einsum("cji,cj->ci", frames, f[self.contact.nodes])
