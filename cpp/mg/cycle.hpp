@@ -60,12 +60,15 @@ class CoarseCycle {
     return s;
   }
 
-  // w = P~ c (w: fine level, overwritten), c the multilevel correction for the fine residual r,
-  // the truncation mask and the fine correction bounds [lo, hi] (ignored when !bounded).
+  // w = P~ c (w: fine level, n_fine * d, overwritten), c the multilevel correction for the fine
+  // residual r, the truncation mask and the fine correction bounds [lo, hi] (ignored when !bounded).
   void correction(const CycleOptions& opt, const double* r_fine, const std::uint8_t* mask, const double* lo_f,
-                  const double* hi_f, bool bounded, double* w) {
+                  const double* hi_f, bool bounded, double* w, Index n_fine) {
     const int top = (int)lv_.size() - 1;
-    if (top < 0) return;  // a single level: the smoother alone, w stays as given (zero)
+    if (top < 0) {  // a single level: the smoother alone
+      std::fill(w, w + n_fine * d, 0.0);
+      return;
+    }
     const BlockMatrix<d>& P = H_.prolongation(top);
     Vectors& C = lv_[top];
     restrict_residual<d>(P, mask, r_fine, C.b.data());
@@ -73,7 +76,7 @@ class CoarseCycle {
     set_bounded(C, bounded);
     std::fill(C.x.begin(), C.x.end(), 0.0);
     cycle(opt, top, opt.cycle);
-    prolongate_add<d>(P, mask, C.x.data(), w);
+    prolongate<d>(P, mask, C.x.data(), w);
   }
 
  private:

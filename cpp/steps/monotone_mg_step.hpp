@@ -60,8 +60,7 @@ class MonotoneMultigridStep {
       built_.hessian = hessian_;
     }
     pc.lap(Phase::CoarseUpdate);
-    std::fill(w_.begin(), w_.end(), 0.0);
-    C_.correction(opt_, r_.data(), mask_.data(), lo_.data(), hi_.data(), bounded, w_.data());
+    C_.correction(opt_, r_.data(), mask_.data(), lo_.data(), hi_.data(), bounded, w_.data(), P_.num_nodes());
     for (std::size_t k = 0; k < u.size(); ++k) u[k] += w_[k];
     pc.lap(Phase::CoarseCorrection);
     for (int s = 0; s < opt_.nu2; ++s) Smoother::sweep(P_, u.data(), false);
