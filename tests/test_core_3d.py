@@ -162,3 +162,19 @@ def test_3d_half_model_with_a_roller_equals_the_full_model(friction):
     Q = half.solver.frames
     c = np.searchsorted(half.contact.nodes, on_plane)
     np.testing.assert_allclose(np.abs(Q[c][:, :, 1]), np.broadcast_to([1.0, 0.0, 0.0], (len(c), 3)), atol=1e-15)
+
+
+@pytest.mark.parametrize("friction", [Coulomb(0.3), Tresca(2.0)], ids=["coulomb", "tresca"])
+def test_3d_cycle_counts_do_not_grow_with_the_mesh(friction):
+    """With the friction Hessian in the coarse problem the count stays flat from level 3 to 4 (13
+    and 13 cycles measured for both laws; without it 14 -> 149 for Coulomb and 18 -> 37 for Tresca):
+    a block sheared diagonally, most contact nodes sliding in two tangential directions."""
+    counts = []
+    for levels in (3, 4):
+        p = ContactProblem(box_hierarchy(2, levels, 0.0, 1.0), MAT, [Dirichlet([TOP], (0.002, 0.003, -0.01))],
+                           contact_tags=[BOTTOM], obstacle=PLANE, friction=friction)
+        r = p.solve()
+        assert r.converged and contact_conditions(p, r)["max"] <= VIOLATION_TOL, r.status
+        assert r.counts()["slip_nodes"] > r.counts()["stick_nodes"]
+        counts.append(r.cycles)
+    assert counts[1] <= 20 and counts[1] <= counts[0] + 4, counts
