@@ -132,11 +132,14 @@ def timing(old, new, cell, L, F, reps):
             t[name].append(r["seconds"] / r["cycles"])
             cyc[name] = r["cycles"]
     med = {k: float(np.median(v)) for k, v in t.items()}
+    best = {k: float(np.min(v)) for k, v in t.items()}
     row = {"cell": cell, "level": L, "F": F, "reps": reps, "old_s_per_cycle": med["old"], "new_s_per_cycle": med["new"],
-           "ratio": med["new"] / med["old"], "old_cycles": cyc["old"], "new_cycles": cyc["new"],
+           "ratio": med["new"] / med["old"], "old_min": best["old"], "new_min": best["new"],
+           "ratio_min": best["new"] / best["old"], "old_cycles": cyc["old"], "new_cycles": cyc["new"],
            "old_all": t["old"], "new_all": t["new"]}
-    print(f"timing {cell} L{L} F={F}: old {med['old']:.4f} s/cycle, new {med['new']:.4f} s/cycle, ratio {row['ratio']:.3f} "
-          f"({reps} interleaved solves each)", flush=True)
+    print(f"timing {cell} L{L} F={F}: median old {med['old']:.4f} new {med['new']:.4f} s/cycle (ratio {row['ratio']:.3f}); "
+          f"fastest old {best['old']:.4f} new {best['new']:.4f} (ratio {row['ratio_min']:.3f}); {reps} interleaved solves each; "
+          f"load average {os.getloadavg()[0]:.1f}", flush=True)
     return row
 
 
