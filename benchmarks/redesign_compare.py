@@ -64,8 +64,10 @@ for line in sys.stdin:
         keep["p"].solver
         print(json.dumps({"nodes": int(keep["p"].mesh.num_points)}), flush=True)
     elif cmd["op"] == "time":
+        c0 = time.thread_time()
         r = keep["p"].solve()
-        print(json.dumps({"cycles": int(r.cycles), "seconds": float(r.solve_seconds)}), flush=True)
+        cpu = time.thread_time() - c0
+        print(json.dumps({"cycles": int(r.cycles), "seconds": float(r.solve_seconds), "cpu": cpu}), flush=True)
 '''
 
 FRICTIONS = (0.08, 0.4, 0.7, 0.9, 1.0, 1.1, 2.0, 5.0, 8.0, 40.0)
@@ -125,21 +127,25 @@ def timing(old, new, cell, L, F, reps):
     for w in (old, new):
         w.ask(op="prepare", cell=cell, level=L, F=F)
     t = {"old": [], "new": []}
+    cpu = {"old": [], "new": []}
     cyc = {}
     for k in range(reps):
         for name, w in ((("old", old), ("new", new)) if k % 2 == 0 else (("new", new), ("old", old))):
             r = w.ask(op="time")
             t[name].append(r["seconds"] / r["cycles"])
+            cpu[name].append(r["cpu"] / r["cycles"])  # the solve runs on this thread: CPU time is less load-dependent
             cyc[name] = r["cycles"]
     med = {k: float(np.median(v)) for k, v in t.items()}
     best = {k: float(np.min(v)) for k, v in t.items()}
     row = {"cell": cell, "level": L, "F": F, "reps": reps, "old_s_per_cycle": med["old"], "new_s_per_cycle": med["new"],
            "ratio": med["new"] / med["old"], "old_min": best["old"], "new_min": best["new"],
            "ratio_min": best["new"] / best["old"], "old_cycles": cyc["old"], "new_cycles": cyc["new"],
-           "old_all": t["old"], "new_all": t["new"]}
+           "old_all": t["old"], "new_all": t["new"], "old_cpu": cpu["old"], "new_cpu": cpu["new"],
+           "cpu_ratio": float(np.median(cpu["new"]) / np.median(cpu["old"]))}
     print(f"timing {cell} L{L} F={F}: median old {med['old']:.4f} new {med['new']:.4f} s/cycle (ratio {row['ratio']:.3f}); "
           f"fastest old {best['old']:.4f} new {best['new']:.4f} (ratio {row['ratio_min']:.3f}); {reps} interleaved solves each; "
-          f"load average {os.getloadavg()[0]:.1f}", flush=True)
+          f"load average {os.getloadavg()[0]:.1f}; CPU time per cycle median old {np.median(cpu['old']):.4f} new "
+          f"{np.median(cpu['new']):.4f} (ratio {row['cpu_ratio']:.3f})", flush=True)
     return row
 
 
