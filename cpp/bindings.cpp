@@ -1,12 +1,13 @@
 // pybind11 bindings: small flat functions over numpy arrays and two classes per dimension
 // (BlockMatrix, ContactSolver). Shapes are checked here; Python checks meaning.
+#include <pybind11/functional.h>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
-#include "assembly.hpp"
 #include "contact_solver.hpp"
+#include "fem/assembly.hpp"
 #include "fem/bisection.hpp"
-#include "refinement.hpp"
+#include "fem/refine_2d.hpp"
 #include "fem/refine_3d.hpp"
 
 namespace py = pybind11;
@@ -17,23 +18,6 @@ using IArr = py::array_t<Index, py::array::c_style | py::array::forcecast>;
 using BArr = py::array_t<std::uint8_t, py::array::c_style | py::array::forcecast>;
 
 namespace {
-
-CellType parse_cell(const std::string& s) {
-  if (s == "triangle") return CellType::Triangle;
-  if (s == "quad") return CellType::Quad;
-  if (s == "tetra") return CellType::Tetra;
-  if (s == "hexahedron") return CellType::Hexahedron;
-  throw InputError("unknown cell type '" + s + "' (expected triangle, quad, tetra or hexahedron)");
-}
-int cell_dim(CellType t) { return (t == CellType::Triangle || t == CellType::Quad) ? 2 : 3; }
-int cell_nodes(CellType t) {
-  switch (t) {
-    case CellType::Triangle: return 3;
-    case CellType::Quad: case CellType::Tetra: return 4;
-    case CellType::Hexahedron: return 8;
-    default: return 2;
-  }
-}
 
 template <class A>
 void require_shape(const A& a, const char* name, std::initializer_list<py::ssize_t> shape) {
@@ -59,8 +43,8 @@ struct MeshView {
 MeshView view(const DArr& points, const IArr& cells, const std::string& cell_type) {
   MeshView v;
   v.type = parse_cell(cell_type);
-  v.d = cell_dim(v.type);
-  v.k = cell_nodes(v.type);
+  v.d = cell_info(v.type).dim;
+  v.k = cell_info(v.type).nodes;
   require_shape(points, "points", {-1, v.d});
   require_shape(cells, "cells", {-1, v.k});
   v.X = points.data(); v.n = points.shape(0); v.C = cells.data(); v.m = cells.shape(0);
@@ -72,16 +56,6 @@ MeshView view(const DArr& points, const IArr& cells, const std::string& cell_typ
   return v;
 }
 
-template <class F>
-auto dispatch(CellType t, F&& f) {
-  switch (t) {
-    case CellType::Triangle: return f(std::integral_constant<CellType, CellType::Triangle>{});
-    case CellType::Quad: return f(std::integral_constant<CellType, CellType::Quad>{});
-    case CellType::Tetra: return f(std::integral_constant<CellType, CellType::Tetra>{});
-    default: return f(std::integral_constant<CellType, CellType::Hexahedron>{});
-  }
-}
-
 template <class T>
 py::array_t<T> to_numpy(const std::vector<T>& v, std::vector<py::ssize_t> shape) {
   py::array_t<T> a(shape);
@@ -90,8 +64,39 @@ py::array_t<T> to_numpy(const std::vector<T>& v, std::vector<py::ssize_t> shape)
 }
 
 template <int d>
-py::dict result_to_dict(const SolveResult& R, Index n, Index nc) {
+py::array_t<double> frames_array(const ContactSolver<d>& S) {
+  const auto& T = S.problem().basis();
+  py::array_t<double> Q({(py::ssize_t)T.num_blocks(), (py::ssize_t)d, (py::ssize_t)d});
+  double* q = Q.mutable_data();
+  for (Index c = 0; c < T.num_blocks(); ++c)
+    for (int a = 0; a < d; ++a)
+      for (int b = 0; b < d; ++b) q[(c * d + a) * d + b] = T.block(c)(a, b);
+  return Q;
+}
+
+// The dofs of the contact nodes fixed in their frames (a prescribed tangential component).
+template <int d>
+py::array_t<std::uint8_t> frame_fixed_array(const ContactSolver<d>& S) {
+  const auto& P = S.problem();
+  py::array_t<std::uint8_t> F({(py::ssize_t)P.num_contact(), (py::ssize_t)d});
+  for (Index c = 0; c < P.num_contact(); ++c)
+    for (int a = 0; a < d; ++a) F.mutable_data()[c * d + a] = P.fixed()[P.contact_node(c) * d + a];
+  return F;
+}
+
+py::dict record_to_dict(const CycleRecord& r) {
+  py::dict o;
+  o["cycle"] = r.cycle; o["outer"] = r.outer; o["correction_norm"] = r.correction_norm; o["energy"] = r.energy;
+  o["seconds"] = r.seconds; o["error"] = r.error; o["active"] = r.active; o["stick"] = r.stick; o["slip"] = r.slip;
+  o["rebuilt"] = r.rebuilt;
+  return o;
+}
+
+template <int d>
+py::dict result_to_dict(const SolveResult& R, const ContactSolver<d>& S) {
+  const Index n = S.num_nodes(), nc = S.num_contact();
   py::dict out;
+  out["frames"] = frames_array<d>(S);
   out["u"] = to_numpy(R.u, {(py::ssize_t)n, d});
   out["contact_force"] = to_numpy(R.contact_force, {(py::ssize_t)nc, d});
   out["friction_bound"] = to_numpy(R.friction_bound, {(py::ssize_t)nc});
@@ -125,19 +130,7 @@ py::dict result_to_dict(const SolveResult& R, Index n, Index nc) {
   return out;
 }
 
-Law parse_law(const std::string& s) {
-  if (s == "linear") return Law::Linear;
-  if (s == "frictionless") return Law::Frictionless;
-  if (s == "tresca") return Law::Tresca;
-  if (s == "coulomb") return Law::Coulomb;
-  throw InputError("unknown friction law '" + s + "' (expected linear, frictionless, tresca or coulomb)");
-}
-CycleType parse_cycle(const std::string& s) {
-  if (s == "V") return CycleType::V;
-  if (s == "W") return CycleType::W;
-  if (s == "F") return CycleType::F;
-  throw InputError("unknown cycle type '" + s + "' (expected V, W or F)");
-}
+const char* cycle_name(CycleType t) { return t == CycleType::V ? "V" : t == CycleType::W ? "W" : "F"; }
 
 template <int d>
 void bind_dim(py::module_& m) {
@@ -162,7 +155,7 @@ void bind_dim(py::module_& m) {
   py::class_<CS>(m, ("ContactSolver" + sfx).c_str(), "Multigrid for linear elasticity with contact and friction")
       .def(py::init([](const BM& A, DArr f, BArr fixed, DArr fixed_values, IArr contact_nodes, DArr normals, DArr gaps,
                        DArr coefficients, const std::string& law, py::list transfers, const std::string& cycle, int nu1,
-                       int nu2) {
+                       int nu2, py::object frame_fixed, py::object frame_values) {
              const py::ssize_t n = A.rows, nc = contact_nodes.size();
              require_shape(f, "load", {n, d});
              require_shape(fixed, "fixed", {n, d});
@@ -171,8 +164,17 @@ void bind_dim(py::module_& m) {
              require_shape(normals, "normals", {nc, d});
              require_shape(gaps, "gaps", {nc});
              require_shape(coefficients, "coefficients", {nc});
-             if (nu1 < 0 || nu2 < 0 || nu1 + nu2 < 1 || nu1 > 100 || nu2 > 100)
-               throw InputError("smoothing steps nu1, nu2 must lie in 0..100 with nu1 + nu2 >= 1");
+             check_smoothing_steps(nu1, nu2);
+             BArr ff;
+             DArr fv;
+             if (frame_fixed.is_none() != frame_values.is_none())
+               throw InputError("frame_fixed and frame_values go together");
+             if (!frame_fixed.is_none()) {
+               ff = frame_fixed.cast<BArr>();
+               fv = frame_values.cast<DArr>();
+               require_shape(ff, "frame_fixed", {nc, d});
+               require_shape(fv, "frame_values", {nc, d});
+             }
              std::vector<typename CS::Transfer> T;
              for (auto item : transfers) {
                auto t = item.cast<py::tuple>();
@@ -194,17 +196,27 @@ void bind_dim(py::module_& m) {
              co.nu2 = nu2;
              std::vector<Index> cn(contact_nodes.data(), contact_nodes.data() + nc);
              return new CS(A, f.data(), fixed.data(), fixed_values.data(), cn, normals.data(), gaps.data(), coefficients.data(),
-                           parse_law(law), T, co);
+                           parse_law(law), T, co, frame_fixed.is_none() ? nullptr : ff.data(),
+                           frame_fixed.is_none() ? nullptr : fv.data());
            }),
            py::arg("A"), py::arg("load"), py::arg("fixed"), py::arg("fixed_values"), py::arg("contact_nodes"),
            py::arg("normals"), py::arg("gaps"), py::arg("coefficients"), py::arg("law"), py::arg("transfers"),
-           py::arg("cycle") = "V", py::arg("nu1") = 3, py::arg("nu2") = 3)
+           py::arg("cycle") = "V", py::arg("nu1") = 3, py::arg("nu2") = 3, py::arg("frame_fixed") = py::none(),
+           py::arg("frame_values") = py::none(),
+           "fixed/fixed_values: Dirichlet components in canonical axes (a contact node keeps its contact condition "
+           "in its free directions); frame_fixed/frame_values (nc, d): components fixed in the contact frames")
       .def("solve", [](CS& S, py::object u0, double tol, double rtol, int max_cycles, bool fixed_point, double fp_tol,
-                       int fp_max, py::object reference) {
+                       int fp_max, py::object reference, py::object cycle, py::object nu1, py::object nu2, py::object progress) {
              SolveOptions o;
              o.tol = tol; o.rtol = rtol; o.max_cycles = max_cycles; o.fixed_point_tol = fp_tol; o.fixed_point_max = fp_max;
              if (!(tol >= 0) || !(rtol >= 0) || !(tol > 0 || rtol > 0)) throw InputError("tolerances must be >= 0, one of them > 0");
              if (max_cycles < 1) throw InputError("max_cycles must be at least 1");
+             CycleOptions co = S.cycle_options();
+             if (!cycle.is_none()) co.cycle = parse_cycle(cycle.cast<std::string>());
+             if (!nu1.is_none()) co.nu1 = nu1.cast<int>();
+             if (!nu2.is_none()) co.nu2 = nu2.cast<int>();
+             check_smoothing_steps(co.nu1, co.nu2);
+             if (!progress.is_none() && !PyCallable_Check(progress.ptr())) throw InputError("progress must be callable or None");
              DArr u;
              const double* up = nullptr;
              if (!u0.is_none()) {
@@ -218,21 +230,35 @@ void bind_dim(py::module_& m) {
                require_shape(ref, "reference", {(py::ssize_t)S.num_nodes(), d});
                o.reference = ref.data();
              }
-             S.set_interrupt_check([] { py::gil_scoped_acquire g; return PyErr_CheckSignals() != 0; });
+             // Ctrl-C and the progress callback need the GIL, taken only for them. A Python error
+             // (KeyboardInterrupt, or one raised by the callback) is left set and stops the solve.
+             S.monitor().interrupted = [] { py::gil_scoped_acquire g; return PyErr_CheckSignals() != 0; };
+             if (!progress.is_none())
+               S.monitor().progress = [&progress](const CycleRecord& r) {
+                 py::gil_scoped_acquire g;
+                 try { progress(record_to_dict(r)); }
+                 catch (py::error_already_set& e) { e.restore(); throw Interrupted(); }
+               };
              SolveResult R;
              bool interrupted = false;
              {
                py::gil_scoped_release release;
-               try { R = fixed_point ? S.solve_fixed_point(up, o) : S.solve(up, o); }
+               try { R = fixed_point ? S.solve_fixed_point(up, o, co) : S.solve(up, o, co); }
                catch (const Interrupted&) { interrupted = true; }
              }
-             S.set_interrupt_check(nullptr);
+             S.monitor().interrupted = nullptr;
+             S.monitor().progress = nullptr;
              if (interrupted) throw py::error_already_set();
-             return result_to_dict<d>(R, S.num_nodes(), S.num_contact());
+             py::dict out = result_to_dict<d>(R, S);
+             out["cycle_type"] = std::string(cycle_name(co.cycle)) + "(" + std::to_string(co.nu1) + "," + std::to_string(co.nu2) + ")";
+             return out;
            },
            py::arg("u0") = py::none(), py::arg("tol") = 1e-11, py::arg("rtol") = 0.0, py::arg("max_cycles") = 200,
            py::arg("fixed_point") = false, py::arg("fixed_point_tol") = 1e-9, py::arg("fixed_point_max") = 100,
-           py::arg("reference") = py::none())
+           py::arg("reference") = py::none(), py::arg("cycle") = py::none(), py::arg("nu1") = py::none(),
+           py::arg("nu2") = py::none(), py::arg("progress") = py::none(),
+           "cycle, nu1, nu2 override the constructor's for this solve; progress(record: dict) is called after every "
+           "cycle (cycle, outer, correction_norm, energy, seconds, error, active, stick, slip, rebuilt)")
       .def("smooth", [](CS& S, DArr u0, int sweeps) {
              require_shape(u0, "u0", {(py::ssize_t)S.num_nodes(), d});
              if (sweeps < 0) throw InputError("sweeps must be >= 0");
@@ -244,29 +270,36 @@ void bind_dim(py::module_& m) {
              return to_numpy(u, {(py::ssize_t)S.num_nodes(), d});
            }, py::arg("u0"), py::arg("sweeps") = 1,
            "Nonlinear Gauss-Seidel sweeps (alternating, forward first) from u0; a solution is a fixed point")
-      .def("set_tresca_bounds", [](CS& S, DArr s) { require_shape(s, "bounds", {(py::ssize_t)S.num_contact()}); S.set_tresca_bounds(s.data()); })
-      .def("set_coefficients", [](CS& S, DArr s) { require_shape(s, "coefficients", {(py::ssize_t)S.num_contact()}); S.set_coefficients(s.data()); })
-      .def_property_readonly("num_levels", [](const CS& S) { return S.coarse().num_coarse_levels() + 1; })
+      .def_property_readonly("num_levels", [](const CS& S) { return S.hierarchy().num_coarse_levels() + 1; })
+      .def_property_readonly("frames", [](const CS& S) { return frames_array<d>(S); },
+                             "the contact frames Q = [n, t(, s)] (columns), shape (num_contact, d, d)")
+      .def_property_readonly("frame_fixed", [](const CS& S) { return frame_fixed_array<d>(S); },
+                             "the components of each contact node fixed in its frame (num_contact, d)")
       .def("coarse_matrix", [](const CS& S, int l) {
-             if (l < 0 || l >= S.coarse().num_coarse_levels()) throw py::index_error("no such coarse level");
-             return std::make_shared<BM>(S.coarse().matrix(l));
+             if (l < 0 || l >= S.hierarchy().num_coarse_levels()) throw py::index_error("no such coarse level");
+             return std::make_shared<BM>(S.hierarchy().matrix(l));
            })
+      .def("set_rows_to_smooth", [](CS& S, int l, IArr rows) {
+             if (l < 0 || l >= S.hierarchy().num_coarse_levels()) throw py::index_error("no such coarse level");
+             S.coarse_cycle().set_rows_to_smooth(l, SweepOrder(std::vector<Index>(rows.data(), rows.data() + rows.size())));
+           }, py::arg("level"), py::arg("rows"), "the rows smoothed on coarse level `level` (all by default)")
       .def("fine_matrix", [](const CS& S) { return std::make_shared<BM>(S.fine_matrix()); })
       .def("memory_bytes", &CS::memory_bytes)
       .def("rebuild_coarse", &CS::rebuild_coarse, "Full Galerkin rebuild of the coarse matrices for the current truncation");
 
-  m.def(("solve_node_tresca_" + sfx).c_str(), [](DArr B, DArr b, double g, double s) {
+  m.def(("solve_node_tresca_" + sfx).c_str(), [](DArr B, DArr b, double g, double s, int free) {
     require_shape(B, "B", {d, d}); require_shape(b, "b", {d});
-    Vec<d> x = solve_node_tresca<d>(CMatMap<d>(B.data()), CVecMap<d>(b.data()), g, s);
+    Vec<d> x = solve_node_tresca<d>(CMatMap<d>(B.data()), CVecMap<d>(b.data()), g, s, (TangentMask)free);
     return to_numpy(std::vector<double>(x.data(), x.data() + d), {d});
-  });
-  m.def(("solve_node_coulomb_" + sfx).c_str(), [](DArr B, DArr b, double g, double F, DArr old) {
+  }, py::arg("B"), py::arg("b"), py::arg("g"), py::arg("s"), py::arg("free") = (int)all_tangents<d>());
+  m.def(("solve_node_coulomb_" + sfx).c_str(), [](DArr B, DArr b, double g, double F, DArr old, int free) {
     require_shape(B, "B", {d, d}); require_shape(b, "b", {d}); require_shape(old, "old", {d});
-    Vec<d> x = solve_node_coulomb<d>(CMatMap<d>(B.data()), CVecMap<d>(b.data()), g, F, CVecMap<d>(old.data()));
+    Vec<d> x = solve_node_coulomb<d>(CMatMap<d>(B.data()), CVecMap<d>(b.data()), g, F, CVecMap<d>(old.data()), (TangentMask)free);
     return to_numpy(std::vector<double>(x.data(), x.data() + d), {d});
-  });
+  }, py::arg("B"), py::arg("b"), py::arg("g"), py::arg("F"), py::arg("old"), py::arg("free") = (int)all_tangents<d>());
   m.def(("restrict_bounds_" + sfx).c_str(), [](Index n_fine, Index n_coarse, IArr ptr, IArr parent, DArr weight, py::object mask,
                                                DArr lo, DArr hi) {
+    if (ptr.size() != n_fine + 1) throw InputError("ptr must have n_fine + 1 entries");
     BlockMatrix<d> P = make_prolongation<d>(n_fine, n_coarse, ptr.data(), parent.data(), weight.data());
     require_shape(lo, "lo", {(py::ssize_t)n_fine, d}); require_shape(hi, "hi", {(py::ssize_t)n_fine, d});
     BArr mk;
@@ -276,7 +309,40 @@ void bind_dim(py::module_& m) {
     restrict_bounds<d>(P, mp, lo.data(), hi.data(), lc.mutable_data(), hc.mutable_data());
     return py::make_tuple(lc, hc);
   });
+  m.def(("contact_frames_" + sfx).c_str(), [](DArr normals, py::object fixed) {
+    const py::ssize_t nc = normals.ndim() == 2 ? normals.shape(0) : 0;
+    require_shape(normals, "normals", {nc, d});
+    BArr fx;
+    if (!fixed.is_none()) { fx = fixed.cast<BArr>(); require_shape(fx, "fixed", {nc, d}); }
+    py::array_t<double> Q({nc, (py::ssize_t)d, (py::ssize_t)d});
+    for (py::ssize_t c = 0; c < nc; ++c)
+      MatMap<d>(Q.mutable_data() + c * d * d) = contact_frame<d>(normals.data() + c * d, fixed.is_none() ? nullptr : fx.data() + c * d, c);
+    return Q;
+  }, py::arg("normals"), py::arg("fixed") = py::none(),
+  "the contact frames Q = [n, t(, s)] (columns) the solver builds for these normals and fixed canonical components");
+  m.def(("classify_contact_dirichlet_" + sfx).c_str(), [](IArr nodes, BArr fixed, DArr values, DArr normals, DArr gaps) {
+    const py::ssize_t nc = nodes.size();
+    require_shape(fixed, "fixed", {nc, d}); require_shape(values, "values", {nc, d});
+    require_shape(normals, "normals", {nc, d}); require_shape(gaps, "gaps", {nc});
+    py::array_t<std::int8_t> kind(nc);
+    for (py::ssize_t c = 0; c < nc; ++c)
+      kind.mutable_at(c) = (std::int8_t)classify_contact_dirichlet<d>(normals.data() + c * d, gaps.data()[c], fixed.data() + c * d,
+                                                                     values.data() + c * d, nodes.data()[c]);
+    return kind;
+  }, py::arg("nodes"), py::arg("fixed"), py::arg("values"), py::arg("normals"), py::arg("gaps"),
+  "per contact node: 0 no component fixed, 1 tangential components fixed (a contact node), 2 normal prescribed "
+  "(admissibly: not a contact node), 3 every component fixed; errors for penetration and misaligned rollers");
+  m.def(("friction_hessian_" + sfx).c_str(), [](double s, DArr u, int free) {
+    require_shape(u, "u", {d});
+    Mat<d> H = friction_hessian<d>(s, u.data(), (TangentMask)free);
+    py::array_t<double> out({(py::ssize_t)d, (py::ssize_t)d});
+    for (int a = 0; a < d; ++a)
+      for (int b = 0; b < d; ++b) out.mutable_at(a, b) = H(a, b);
+    return out;
+  }, py::arg("s"), py::arg("u"), py::arg("free") = (int)all_tangents<d>(),
+  "Hessian of s |u_T| (frame components, free tangential mask) at a sliding node");
   m.def(("galerkin_product_" + sfx).c_str(), [](const BM& A, Index n_coarse, IArr ptr, IArr parent, DArr weight) {
+    if (ptr.size() != A.rows + 1) throw InputError("ptr must have num_fine + 1 entries");
     BlockMatrix<d> P = make_prolongation<d>(A.rows, n_coarse, ptr.data(), parent.data(), weight.data());
     auto C = std::make_shared<BM>();
     GalerkinProduct<d> gp;
@@ -292,16 +358,37 @@ PYBIND11_MODULE(_core, m) {
   bind_dim<2>(m);
   bind_dim<3>(m);
 
+  m.def("cell_table", [] {
+    py::dict out;
+    for (const CellInfo& c : cell_table()) {
+      py::dict e;
+      e["dim"] = c.dim;
+      e["nodes"] = c.nodes;
+      e["facet_type"] = cell_name(c.facet_type);
+      e["facet_nodes"] = c.facet_nodes;
+      py::list facets;
+      for (int f = 0; f < c.num_facets; ++f) {
+        py::list fl;
+        for (int a = 0; a < c.facet_nodes; ++a) fl.append(c.facets[f][a]);
+        facets.append(py::tuple(fl));
+      }
+      e["facets"] = facets;
+      e["body"] = c.volume;
+      out[c.name] = e;
+    }
+    return out;
+  }, "The cell types of the core: dim, nodes, facet type, local nodes of each facet, whether a body cell");
+
   m.def("check_cells", [](DArr points, IArr cells, const std::string& cell_type) {
     MeshView v = view(points, cells, cell_type);
-    dispatch(v.type, [&](auto T) { check_cells<decltype(T)::value>(v.X, v.n, v.C, v.m); });
+    dispatch_cell(v.type, [&](auto T) { check_cells<decltype(T)::value>(v.X, v.n, v.C, v.m); });
   });
 
   m.def("assemble_elasticity", [](DArr points, IArr cells, const std::string& cell_type, double E, double nu) -> py::object {
     MeshView v = view(points, cells, cell_type);
     Material mat{E, nu};
     mat.validate();
-    return dispatch(v.type, [&](auto T) -> py::object {
+    return dispatch_cell(v.type, [&](auto T) -> py::object {
       constexpr CellType t = decltype(T)::value;
       auto A = std::make_shared<BlockMatrix<Element<t>::dim>>();
       {
@@ -318,7 +405,7 @@ PYBIND11_MODULE(_core, m) {
     const int nc = nodal.shape(1);
     py::array_t<double> out({(py::ssize_t)v.n, (py::ssize_t)nc});
     std::fill(out.mutable_data(), out.mutable_data() + v.n * nc, 0.0);
-    dispatch(v.type, [&](auto T) { assemble_mass_load<decltype(T)::value>(v.X, v.C, v.m, nodal.data(), nc, out.mutable_data()); });
+    dispatch_cell(v.type, [&](auto T) { assemble_mass_load<decltype(T)::value>(v.X, v.C, v.m, nodal.data(), nc, out.mutable_data()); });
     return out;
   });
 

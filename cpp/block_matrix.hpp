@@ -52,27 +52,6 @@ struct BlockMatrix {
     }
   }
 
-  // y = A^T x (rectangular transfer operators use this as restriction)
-  void multiply_transpose(const double* x, double* y) const {
-    std::fill(y, y + d * cols, 0.0);
-    for (Index i = 0; i < rows; ++i) {
-      CVecMap<d> xi(x + d * i);
-      for (Index k = indptr[i]; k < indptr[i + 1]; ++k)
-        VecMap<d>(y + d * indices[k]).noalias() += block(k).transpose() * xi;
-    }
-  }
-
-  double energy_product(const double* x) const {  // x^T A x
-    double e = 0;
-    for (Index i = 0; i < rows; ++i) {
-      Vec<d> s = Vec<d>::Zero();
-      for (Index k = indptr[i]; k < indptr[i + 1]; ++k)
-        s.noalias() += block(k) * CVecMap<d>(x + d * indices[k]);
-      e += CVecMap<d>(x + d * i).dot(s);
-    }
-    return e;
-  }
-
   std::size_t memory_bytes() const {
     return sizeof(Index) * (indptr.size() + diag.size()) + sizeof(ColIndex) * indices.size() + sizeof(double) * values.size();
   }

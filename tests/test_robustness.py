@@ -82,21 +82,23 @@ def test_initial_penetration_is_pushed_out():
 @pytest.mark.parametrize("aspect,max_cycles", [(1, 30), (8, 300), (32, 100)])
 def test_high_aspect_ratio_quads(aspect, max_cycles):
     """A layer whose quads have the given aspect ratio, pressed with friction onto the plane. Point
-    block Gauss-Seidel smooths anisotropic cells poorly: 14 cycles at aspect 1, about 200 at 8, and
-    at 32 no convergence within 100 cycles — which must then be reported, with finite numbers."""
+    block Gauss-Seidel smooths anisotropic cells poorly (14 cycles at aspect 1, about 200 at 8, no
+    convergence within 100 at 32 today). Whatever the smoother: a result that says it converged
+    satisfies the contact conditions, one that did not says so plainly, with finite numbers and a
+    correction that shrank (slow, not divergent); aspect 1 and 8 must converge."""
     h = MeshHierarchy.build(rectangle(4, 4, lx=aspect * 1.0, ly=1.0, cell="quad"), 5)
     p = ContactProblem(h, Material(100.0, 0.3), [Dirichlet([3], (0.01, -0.01))], contact_tags=[1],
                        obstacle=PlaneObstacle((0.0, 0.0), (0.0, -1.0)), friction=Coulomb(0.3))
     res = p.solve(max_cycles=max_cycles)
     print(f"aspect {aspect}: {res.cycles} cycles, {res.status}")
     assert np.all(np.isfinite(res.displacement))
-    if aspect <= 8:
-        assert res.converged
+    assert res.converged or aspect > 8, res.status
+    if res.converged:
         assert_contact_conditions(res, 0.3, p.contact.gaps)
     else:
-        assert not res.converged and "no convergence" in res.status
+        assert res.status == f"no convergence in {max_cycles} cycles"
         c = res.history["correction_norm"]
-        assert c[-1] < c[0]  # slow, not divergent
+        assert np.all(np.isfinite(c)) and c[-1] < c[0]
 
 
 def test_non_convergence_is_reported():

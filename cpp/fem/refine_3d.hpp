@@ -6,7 +6,7 @@
 #pragma once
 #include <algorithm>
 #include <array>
-#include "../refinement.hpp"
+#include "refine_2d.hpp"
 
 namespace cmg {
 

@@ -43,6 +43,10 @@ def contact_conditions(problem, result) -> Dict[str, float]:
     Q = result.contact_frames
     ul = to_local(Q, u[c.nodes])
     sl = to_local(Q, r[c.nodes])
+    # a tangential component fixed by a Dirichlet condition takes no part in friction: its force is a reaction
+    if len(c.nodes):
+        tied = problem.solver.frame_fixed.astype(bool)
+        ul[tied], sl[tied] = 0.0, 0.0
     # Forces are measured against the force scale of the problem: the largest contact force, support
     # reaction or load. A body that carries no force at all (pushed onto nothing, it only translates)
     # has none; there the stiffness scale max|A| max|u| measures what round-off is.

@@ -1,37 +1,27 @@
-"""The nodal contact frames Q_p = [n, t(, s)] (columns), the one Python place that builds them.
-
-The core rotates each contact node into the frame built from its normal by the same rule
-(cpp: frame_from_normal): in 2D t is n turned by +90 degrees; in 3D t is orthogonal to n, built
-from the canonical axis least aligned with n, and s = n x t. Results carry these frames
-(ContactResult.contact_frames); checks and outputs use them from there. A core that returns its
-own frames (raw["frames"] of a solve) is taken at its word by ContactResult.from_raw; the
-problem's frames (ContactBoundary.frames) come from here until they are switched to the core
-solver's.
+"""The nodal contact frames Q_p = [n, t(, s)] (columns): the Python face of the core's one
+construction (cpp/contact_frames.hpp). In 2D t is n turned by +90 degrees; in 3D t lies along a
+Dirichlet-fixed axis orthogonal to n where there is one, else it is built from the canonical axis
+least aligned with n, and s = n x t. The problem's ContactBoundary.frames and every result's
+contact_frames are these; checks and outputs use them from there.
 """
 from __future__ import annotations
 
+from typing import Optional
+
 import numpy as np
 
+from . import _core
 
-def contact_frames(normals: np.ndarray) -> np.ndarray:
-    """Frames (nc, d, d) with columns n, t(, s) for the unit (or non-zero) normals (nc, d)."""
-    normals = np.asarray(normals, dtype=float)
-    nc, d = normals.shape
-    Q = np.zeros((nc, d, d))
-    if nc == 0:
-        return Q
-    n = normals / np.linalg.norm(normals, axis=1)[:, None]
-    Q[:, :, 0] = n
-    if d == 2:
-        Q[:, 0, 1], Q[:, 1, 1] = -n[:, 1], n[:, 0]
-        return Q
-    k = np.argmin(np.abs(n), axis=1)
-    e = np.zeros_like(n)
-    e[np.arange(nc), k] = 1.0
-    t = np.cross(n, e)
-    t /= np.linalg.norm(t, axis=1)[:, None]
-    Q[:, :, 1], Q[:, :, 2] = t, np.cross(n, t)
-    return Q
+
+def contact_frames(normals: np.ndarray, fixed: Optional[np.ndarray] = None) -> np.ndarray:
+    """Frames (nc, d, d) with columns n, t(, s) for the (non-zero) normals (nc, d), as the core
+    builds them (one construction, cpp/contact_frames.hpp): `fixed` (nc, d), the canonical
+    components fixed by Dirichlet data, makes a fixed axis orthogonal to n a frame tangent in 3D."""
+    normals = np.ascontiguousarray(normals, dtype=float)
+    if normals.ndim != 2 or normals.shape[1] not in (2, 3):
+        raise ValueError(f"normals must have shape (nc, 2) or (nc, 3), got {normals.shape}")
+    build = _core.contact_frames_2D if normals.shape[1] == 2 else _core.contact_frames_3D
+    return build(normals, None if fixed is None else np.ascontiguousarray(fixed, dtype=np.uint8))
 
 
 def to_local(frames: np.ndarray, v: np.ndarray) -> np.ndarray:

@@ -249,13 +249,8 @@ class ContactProblem:
             raise ValueError(f"no boundary facet carries the contact tags {list(tags)}")
         facets = mesh.facets[sel]
         nodes = np.unique(facets)
-        # Dirichlet wins where both apply (e.g. the ends of the Hertz arc on the clamped top edge)
-        nodes = nodes[~self.fixed[nodes].any(axis=1)]
-        if len(nodes) == 0:
-            raise ValueError(f"the contact boundary is empty: every node of the facets tagged {list(tags)} is fixed by "
-                             "Dirichlet data (are the contact tags the Dirichlet tags?)")
-        ones = np.ones((mesh.num_points, 1))
-        measure = _core.assemble_facet_load(mesh.points, facets, ones)[nodes, 0]
+        # Dirichlet wins where it fixes every component (e.g. the ends of the Hertz arc on the clamped top edge)
+        nodes = nodes[~self.fixed[nodes].all(axis=1)]
         at_nodes = getattr(obstacle, "gaps_and_normals_at", None)
         x = mesh.points[nodes]
         gaps, normals = at_nodes(nodes, x) if callable(at_nodes) else obstacle.gaps_and_normals(x)
@@ -265,26 +260,41 @@ class ContactProblem:
                              f"for {len(nodes)} contact nodes")
         if not (np.all(np.isfinite(gaps)) and np.all(np.isfinite(normals))):
             raise ValueError("the obstacle gave non-finite gaps or normals")
+        # A node with some fixed components keeps its contact condition in the free directions; one
+        # whose normal component is prescribed is no contact node (the core checks it is admissible
+        # and refuses a fixed component that is neither normal nor tangential)
+        classify = _core.classify_contact_dirichlet_2D if d == 2 else _core.classify_contact_dirichlet_3D
+        keep = classify(nodes.astype(np.int64), self.fixed[nodes], self.fixed_values[nodes],
+                        np.ascontiguousarray(normals), np.ascontiguousarray(gaps)) < 2
+        nodes, gaps, normals = nodes[keep], gaps[keep], normals[keep]
+        if len(nodes) == 0:
+            raise ValueError(f"the contact boundary is empty: every node of the facets tagged {list(tags)} is fixed by "
+                             "Dirichlet data (are the contact tags the Dirichlet tags?)")
         if np.all(gaps < 0):
             warnings.warn(f"every contact node starts inside the obstacle (gaps from {gaps.min():.3g} to {gaps.max():.3g}): "
                           "is the obstacle normal flipped? It must point from the body into the obstacle", UserWarning,
                           stacklevel=3)
-        return ContactBoundary(nodes.astype(np.int64), np.ascontiguousarray(normals), np.ascontiguousarray(gaps),
-                               measure, facets=np.ascontiguousarray(facets))
+        ones = np.ones((mesh.num_points, 1))
+        measure = _core.assemble_facet_load(mesh.points, facets, ones)[nodes, 0]
+        normals = np.ascontiguousarray(normals)
+        return ContactBoundary(nodes.astype(np.int64), normals, np.ascontiguousarray(gaps), measure,
+                               facets=np.ascontiguousarray(facets),
+                               frames=contact_frames(normals, self.fixed[nodes]))
 
     @property
     def law(self) -> str:
         return "linear" if len(self.contact.nodes) == 0 else self.friction.law
 
-    def _new_core_solver(self, law: str, options: CycleOptions, fixed=None, fixed_values=None, load=None):
-        """A core solver of this problem's matrix and data (building one does not re-assemble)."""
+    def _new_core_solver(self, law: str, options: CycleOptions, frame_fixed=None, frame_values=None, load=None):
+        """A core solver of this problem's matrix and data (building one does not re-assemble).
+        frame_fixed/frame_values (num_contact, d): components of the contact nodes fixed in their
+        frames on top of the Dirichlet data (the known-state linear reference)."""
         d = self.mesh.dim
         cls = _core.ContactSolver2D if d == 2 else _core.ContactSolver3D
         c = self.contact
-        return cls(self.A, self.load if load is None else load, self.fixed if fixed is None else fixed,
-                   self.fixed_values if fixed_values is None else fixed_values, c.nodes, c.normals, c.gaps,
-                   self.coefficients, law, [t.as_tuple() for t in self.hierarchy.transfers], options.cycle,
-                   options.nu1, options.nu2)
+        return cls(self.A, self.load if load is None else load, self.fixed, self.fixed_values, c.nodes, c.normals,
+                   c.gaps, self.coefficients, law, [t.as_tuple() for t in self.hierarchy.transfers], options.cycle,
+                   options.nu1, options.nu2, frame_fixed=frame_fixed, frame_values=frame_values)
 
     def core_solver(self, cycle: Optional[str] = None, nu1: Optional[int] = None, nu2: Optional[int] = None):
         """The core solver for the cycle options (defaults: the problem's), built on first use and
@@ -383,14 +393,15 @@ class ContactProblem:
         """Linear problem with the final contact state of `ref`: active normals fixed on the gap,
         sticking tangentials fixed at zero, sliding nodes loaded with their friction force."""
         c = self.contact
-        fixed, values, load = self.fixed.copy(), self.fixed_values.copy(), self.load.copy()
+        # components fixed in the contact frames (a Dirichlet component keeps its own value)
+        fixed, values, load = np.zeros((len(c.nodes), self.mesh.dim), np.uint8), np.zeros((len(c.nodes), self.mesh.dim)), self.load.copy()
         state = ref.node_state[c.nodes]
         active = state > 0
-        fixed[c.nodes[active], 0] = 1
-        values[c.nodes[active], 0] = c.gaps[active]
+        fixed[active, 0] = 1
+        values[active, 0] = c.gaps[active]
         stick = state == 1
-        fixed[c.nodes[stick], 1:] = 1
-        values[c.nodes[stick], 1:] = 0.0
+        fixed[stick, 1:] = 1
+        values[stick, 1:] = 0.0
         slip = state == 2
         s_local = np.zeros_like(ref.contact_force)
         s_local[slip, 1:] = ref.contact_force[slip, 1:]

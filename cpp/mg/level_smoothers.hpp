@@ -1,7 +1,9 @@
-// Gauss-Seidel sweeps on one level: block (linear) and projected (bounds per component).
+// Gauss-Seidel sweeps on one level: block (linear) and projected (bounds per component), over the
+// rows of a SweepOrder; and the inverted diagonal blocks they use.
 #pragma once
 #include <algorithm>
 #include "block_matrix.hpp"
+#include "mg/sweep_order.hpp"
 
 namespace cmg {
 
@@ -66,27 +68,25 @@ inline Vec<d> local_rhs(const BlockMatrix<d>& A, const double* x, const double* 
 }
 
 template <int d>
-void block_gs_sweep(const BlockMatrix<d>& A, const std::vector<double>& Dinv, const double* b, double* x, bool forward) {
-  const Index n = A.rows;
-  for (Index ii = 0; ii < n; ++ii) {
-    const Index i = forward ? ii : n - 1 - ii;
+void block_gs_sweep(const BlockMatrix<d>& A, const std::vector<double>& Dinv, const double* b, double* x, bool forward,
+                    const SweepOrder& order = SweepOrder()) {
+  order.visit(A.rows, forward, [&](Index i) {
     VecMap<d>(x + d * i) = CMatMap<d>(Dinv.data() + i * d * d) * local_rhs<d>(A, x, b, i);
-  }
+  });
 }
 
 // Projected Gauss-Seidel: nodes without finite bounds get the exact block solve, bounded nodes a
 // component-wise exact minimization with clamping (each step lowers the quadratic energy).
 template <int d>
 void projected_gs_sweep(const BlockMatrix<d>& A, const std::vector<double>& Dinv, const std::vector<std::uint8_t>& bounded,
-                        const std::vector<std::uint8_t>& inert, const double* lo, const double* hi, const double* b, double* x, bool forward) {
-  const Index n = A.rows;
-  for (Index ii = 0; ii < n; ++ii) {
-    const Index i = forward ? ii : n - 1 - ii;
+                        const std::vector<std::uint8_t>& inert, const double* lo, const double* hi, const double* b, double* x, bool forward,
+                        const SweepOrder& order = SweepOrder()) {
+  order.visit(A.rows, forward, [&](Index i) {
     const Vec<d> s = local_rhs<d>(A, x, b, i);
     VecMap<d> xi(x + d * i);
     if (!bounded[i]) {
       xi = CMatMap<d>(Dinv.data() + i * d * d) * s;
-      continue;
+      return;
     }
     const auto D = A.block(A.diag[i]);
     for (int c = 0; c < d; ++c) {
@@ -97,7 +97,7 @@ void projected_gs_sweep(const BlockMatrix<d>& A, const std::vector<double>& Dinv
       // max/min rather than std::clamp: rounding may leave lo a hair above hi
       xi[c] = std::max(lo[d * i + c], std::min(v / D(c, c), hi[d * i + c]));
     }
-  }
+  });
 }
 
 }  // namespace cmg

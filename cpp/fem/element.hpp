@@ -1,22 +1,9 @@
 // Reference elements: first-order Lagrange shape functions and quadrature, one struct per cell type.
 #pragma once
 #include <array>
-#include "common.hpp"
+#include "fem/cell_table.hpp"
 
 namespace cmg {
-
-enum class CellType : int { Triangle = 0, Quad = 1, Tetra = 2, Hexahedron = 3, Line = 4 };
-
-inline const char* cell_name(CellType t) {
-  switch (t) {
-    case CellType::Triangle: return "triangle";
-    case CellType::Quad: return "quad";
-    case CellType::Tetra: return "tetra";
-    case CellType::Hexahedron: return "hexahedron";
-    case CellType::Line: return "line";
-  }
-  return "?";
-}
 
 template <CellType T> struct Element;
 

@@ -3,7 +3,7 @@
 #pragma once
 #include <cmath>
 #include "block_matrix.hpp"
-#include "element.hpp"
+#include "fem/element.hpp"
 
 namespace cmg {
 

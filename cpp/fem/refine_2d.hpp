@@ -3,7 +3,7 @@
 // so that the caller can project them onto a curved boundary.
 #pragma once
 #include <algorithm>
-#include "element.hpp"
+#include "fem/element.hpp"
 
 namespace cmg {
 

@@ -1,0 +1,18 @@
+// Coulomb friction: the bound F_p |s_n| of a node in contact, taken from the iterate (r_n = -s_n);
+// the nodal rule of solve_node_coulomb keeps every local solution a fixed point (nodal_solve.hpp).
+#pragma once
+#include <algorithm>
+#include "laws/contact_node.hpp"
+
+namespace cmg::law {
+
+struct Coulomb {
+  static constexpr bool has_contact = true;
+  template <int d>
+  static Vec<d> solve(const Mat<d>& B, const Vec<d>& b, const ContactNode& p, const Vec<d>& old) {
+    return solve_node_coulomb<d>(B, b, p.gap, p.coef, old, p.free);
+  }
+  static double bound(const ContactNode& p, bool active, double r_n) { return active ? p.coef * std::max(0.0, r_n) : 0.0; }
+};
+
+}  // namespace cmg::law

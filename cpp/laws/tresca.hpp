@@ -1,0 +1,17 @@
+// Tresca friction: a given bound s_p, acting at every contact node whether it touches or not
+// (DESIGN section 4). Algorithm 1 solves a sequence of these with s_p = F_p |s_n(u^{k-1})|.
+#pragma once
+#include "laws/contact_node.hpp"
+
+namespace cmg::law {
+
+struct Tresca {
+  static constexpr bool has_contact = true;
+  template <int d>
+  static Vec<d> solve(const Mat<d>& B, const Vec<d>& b, const ContactNode& p, const Vec<d>&) {
+    return solve_node_tresca<d>(B, b, p.gap, p.bound, p.free);
+  }
+  static double bound(const ContactNode& p, bool, double) { return p.bound; }
+};
+
+}  // namespace cmg::law

@@ -1,0 +1,39 @@
+// Restriction of correction bounds to the next coarser level (DESIGN section 4, step 3).
+#pragma once
+#include <algorithm>
+#include <cmath>
+#include "block_matrix.hpp"
+
+namespace cmg {
+
+// Monotone restriction of correction bounds lo <= c <= hi (lo <= 0 <= hi) through diag(mask) P:
+// any coarse correction within the returned bounds keeps every fine dof within its bounds.
+// A fine dof v = sum_k w_k c_k with sum |w_k| <= sigma holds if each w_k c_k stays within
+// [lo, hi] / max(1, sigma); a coarse dof takes the tightest of these over all fine dofs it touches.
+// Coarse dofs that touch no bounded fine dof keep (-inf, inf).
+template <int d>
+void restrict_bounds(const BlockMatrix<d>& P, const std::uint8_t* mask, const double* lo_f, const double* hi_f, double* lo_c,
+                     double* hi_c) {
+  std::fill(lo_c, lo_c + d * P.cols, -kInf);
+  std::fill(hi_c, hi_c + d * P.cols, kInf);
+  for (Index i = 0; i < P.rows; ++i)
+    for (int c = 0; c < d; ++c) {
+      const Index f = i * d + c;
+      if ((mask && !mask[f]) || (lo_f[f] == -kInf && hi_f[f] == kInf)) continue;
+      double sigma = 0;
+      for (Index k = P.indptr[i]; k < P.indptr[i + 1]; ++k)
+        for (int a = 0; a < d; ++a) sigma += std::abs(P.block(k)(c, a));
+      const double scale = 1.0 / std::max(1.0, sigma);
+      const double lo = lo_f[f] * scale, hi = hi_f[f] * scale;
+      for (Index k = P.indptr[i]; k < P.indptr[i + 1]; ++k)
+        for (int a = 0; a < d; ++a) {
+          const double w = P.block(k)(c, a);
+          if (w == 0) continue;
+          const Index g = P.indices[k] * d + a;
+          if (w > 0) { hi_c[g] = std::min(hi_c[g], hi); lo_c[g] = std::max(lo_c[g], lo); }
+          else { hi_c[g] = std::min(hi_c[g], -lo); lo_c[g] = std::max(lo_c[g], -hi); }
+        }
+    }
+}
+
+}  // namespace cmg

@@ -1,0 +1,76 @@
+// The Galerkin triple product of one level, C = P~^T A P~, symbolic once and numeric per truncation.
+#pragma once
+#include "mg/transfer.hpp"
+
+namespace cmg {
+
+// C = P~^T A P~ with P~ = diag(mask) P (mask per fine dof, nullptr = all ones). The pattern of C is
+// computed once; later calls with a changed mask only refill the values.
+template <int d>
+class GalerkinProduct {
+ public:
+  void build(const BlockMatrix<d>& A, const BlockMatrix<d>& P, const std::uint8_t* mask, BlockMatrix<d>& C) {
+    if (PT_.rows != P.cols || PT_.cols != P.rows) {
+      PT_ = transpose(P);
+      symbolic(A, P, C);
+    }
+    numeric(A, P, mask, C);
+  }
+
+ private:
+  void symbolic(const BlockMatrix<d>& A, const BlockMatrix<d>& P, BlockMatrix<d>& C) {
+    const Index nc = P.cols;
+    C.rows = C.cols = nc;
+    C.indptr.assign(nc + 1, 0);
+    C.indices.clear();
+    std::vector<Index> marker(nc, -1);
+    std::vector<Index> row;
+    for (Index I = 0; I < nc; ++I) {
+      row.clear();
+      for (Index a = PT_.indptr[I]; a < PT_.indptr[I + 1]; ++a) {
+        const Index i = PT_.indices[a];
+        for (Index k = A.indptr[i]; k < A.indptr[i + 1]; ++k) {
+          const Index j = A.indices[k];
+          for (Index b = P.indptr[j]; b < P.indptr[j + 1]; ++b) {
+            const Index J = P.indices[b];
+            if (marker[J] != I) { marker[J] = I; row.push_back(J); }
+          }
+        }
+      }
+      if (std::find(row.begin(), row.end(), I) == row.end()) row.push_back(I);  // keep a diagonal slot
+      std::sort(row.begin(), row.end());
+      C.indices.insert(C.indices.end(), row.begin(), row.end());
+      C.indptr[I + 1] = C.indices.size();
+    }
+    C.values.assign(C.indices.size() * d * d, 0.0);
+    C.find_diagonal();
+  }
+
+  void numeric(const BlockMatrix<d>& A, const BlockMatrix<d>& P, const std::uint8_t* mask, BlockMatrix<d>& C) {
+    const Index nc = P.cols;
+    std::fill(C.values.begin(), C.values.end(), 0.0);
+    std::vector<Index> pos(nc, -1);
+    Mat<d> Z, Y;
+    for (Index I = 0; I < nc; ++I) {
+      for (Index k = C.indptr[I]; k < C.indptr[I + 1]; ++k) pos[C.indices[k]] = k;
+      for (Index a = PT_.indptr[I]; a < PT_.indptr[I + 1]; ++a) {
+        const Index i = PT_.indices[a];
+        Z = PT_.block(a);  // (P_iI)^T
+        if (mask)
+          for (int c = 0; c < d; ++c) Z.col(c) *= mask[i * d + c];
+        if (Z.isZero(0.0)) continue;
+        for (Index k = A.indptr[i]; k < A.indptr[i + 1]; ++k) {
+          const Index j = A.indices[k];
+          Y.noalias() = Z * A.block(k);
+          if (mask)
+            for (int c = 0; c < d; ++c) Y.col(c) *= mask[j * d + c];
+          for (Index b = P.indptr[j]; b < P.indptr[j + 1]; ++b) C.block(pos[P.indices[b]]).noalias() += Y * P.block(b);
+        }
+      }
+    }
+  }
+
+  BlockMatrix<d> PT_;
+};
+
+}  // namespace cmg

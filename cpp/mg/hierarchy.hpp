@@ -1,0 +1,214 @@
+// The Galerkin hierarchy of (truncated monotone) multigrid: coarse matrices from the fine matrix
+// and the prolongations, A_{l} = P_l^T A_{l+1} P_l, truncated on the fine level by a mask, plus
+// the Hessian blocks of the coarse problem on the fine diagonal (3D sliding nodes); kept current
+// by incremental updates, and the factorized coarsest matrix.
+#pragma once
+#include <chrono>
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
+#include "mg/galerkin.hpp"
+#include "mg/level_smoothers.hpp"
+
+namespace cmg {
+
+template <int d>
+class GalerkinHierarchy {
+ public:
+  struct Level {
+    BlockMatrix<d> A;
+    std::vector<double> Dinv;
+    std::vector<std::uint8_t> inert;
+    double scale = 0;  // largest diagonal entry at the last full rebuild
+  };
+
+  // P[l] prolongs level l to level l+1; P.back() ends on the fine level.
+  explicit GalerkinHierarchy(std::vector<BlockMatrix<d>> P) : P_(std::move(P)) {
+    const int nc = (int)P_.size();
+    lv_.resize(nc);
+    gp_.resize(nc);
+    delta_.resize(nc);
+    slot_.resize(nc);
+  }
+
+  int num_coarse_levels() const { return (int)lv_.size(); }
+  const Level& level(int l) const { return lv_[l]; }
+  const BlockMatrix<d>& matrix(int l) const { return lv_[l].A; }
+  const BlockMatrix<d>& prolongation(int l) const { return P_[l]; }
+  const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>& coarsest_factor() const { return ldlt_; }
+  int rebuilds() const { return rebuilds_; }
+  double rebuild_seconds() const { return rebuild_seconds_; }
+  std::size_t memory_bytes() const {
+    std::size_t s = 0;
+    for (auto& L : lv_) s += L.A.memory_bytes() + sizeof(double) * L.Dinv.size();
+    for (auto& P : P_) s += 2 * P.memory_bytes();
+    return s;
+  }
+
+  // Galerkin products for the fine mask, then the fine Hessian blocks (node -> block) on top.
+  void rebuild(const BlockMatrix<d>& A_fine, const std::uint8_t* mask,
+               const std::vector<std::pair<Index, Mat<d>>>& hessian = {}) {
+    const int nc = (int)lv_.size();
+    if (nc == 0) return;
+    const auto t0 = std::chrono::steady_clock::now();
+    for (int l = nc - 1; l >= 0; --l) {
+      const BlockMatrix<d>& Af = (l == nc - 1) ? A_fine : lv_[l + 1].A;
+      gp_[l].build(Af, P_[l], l == nc - 1 ? mask : nullptr, lv_[l].A);
+      lv_[l].scale = max_diagonal<d>(lv_[l].A);
+      invert_diagonal<d>(lv_[l].A, lv_[l].Dinv, lv_[l].inert, lv_[l].scale);
+      if (slot_[l].size() != lv_[l].A.indices.size()) slot_[l].assign(lv_[l].A.indices.size(), -1);
+    }
+    if (!hessian.empty()) {
+      for (const auto& [i, H] : hessian) add_fine_diagonal(i, H, mask);
+      apply_deltas();
+    }
+    factorize_coarsest();
+    ++rebuilds_;
+    incremental_ = 0;
+    rebuild_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  }
+
+  // The same after the fine mask changed on a few dofs and/or the fine Hessian blocks changed, at
+  // a cost proportional to the change: with Delta = T_new - T_old, C_new - C_old = X(T_new) +
+  // X(T_old)^T, X(T) = P^T Delta A T P; a Hessian block H_i adds P~_i^T H_i P~_i; each coarser
+  // level changes by P^T (change of the level above) P. A full rebuild every kFullRebuildEvery
+  // updates keeps round-off from accumulating. old_hessian/new_hessian: the blocks before and
+  // after (with the old and the new mask).
+  void update(const BlockMatrix<d>& A, const std::uint8_t* old_mask, const std::uint8_t* new_mask,
+              const std::vector<std::pair<Index, Mat<d>>>& old_hessian = {},
+              const std::vector<std::pair<Index, Mat<d>>>& new_hessian = {}) {
+    const int nc = (int)lv_.size();
+    if (nc == 0) return;
+    if (incremental_ >= kFullRebuildEvery) { rebuild(A, new_mask, new_hessian); return; }
+    const auto t0 = std::chrono::steady_clock::now();
+    const int top = nc - 1;
+    const BlockMatrix<d>& P = P_[top];
+    for (const auto& [i, H] : old_hessian) add_fine_diagonal(i, -H, old_mask);
+    for (Index i = 0; i < A.rows; ++i)
+      for (int a = 0; a < d; ++a) {
+        const Index k = i * d + a;
+        if (old_mask[k] == new_mask[k]) continue;
+        const double delta = new_mask[k] ? 1.0 : -1.0;
+        for (Index b = P.indptr[i]; b < P.indptr[i + 1]; ++b) {
+          const Vec<d> p = delta * P.block(b).row(a).transpose();
+          if (p.isZero(0.0)) continue;
+          const Index I = P.indices[b];
+          for (Index q = A.indptr[i]; q < A.indptr[i + 1]; ++q) {
+            const Index j = A.indices[q];
+            Eigen::Matrix<double, 1, d> vn = A.block(q).row(a), vo = vn;
+            for (int c = 0; c < d; ++c) { vn[c] *= new_mask[j * d + c]; vo[c] *= old_mask[j * d + c]; }
+            for (Index b2 = P.indptr[j]; b2 < P.indptr[j + 1]; ++b2) {
+              const Index J = P.indices[b2];
+              add_delta(top, I, J, p * (vn * P.block(b2)));
+              add_delta(top, J, I, (p * (vo * P.block(b2))).transpose());
+            }
+          }
+        }
+      }
+    for (const auto& [i, H] : new_hessian) add_fine_diagonal(i, H, new_mask);
+    apply_deltas();
+    factorize_coarsest();
+    ++rebuilds_;
+    ++incremental_;
+    rebuild_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  }
+
+ private:
+  struct DeltaEntry {
+    Index pos, i, j;
+    Mat<d> M;
+  };
+  static constexpr int kFullRebuildEvery = 64;
+
+  void add_delta(int l, Index I, Index J, const Mat<d>& M) {
+    const Index pos = lv_[l].A.find(I, J);
+    Index& s = slot_[l][pos];
+    if (s < 0) {
+      s = (Index)delta_[l].size();
+      delta_[l].push_back({pos, I, J, M});
+    } else {
+      delta_[l][s].M += M;
+    }
+  }
+
+  // top coarse level += P~_i^T H P~_i for a block H on the diagonal of fine node i
+  void add_fine_diagonal(Index i, const Mat<d>& H, const std::uint8_t* mask) {
+    const int top = (int)lv_.size() - 1;
+    const BlockMatrix<d>& P = P_[top];
+    Mat<d> Hm = H;
+    for (int a = 0; a < d; ++a)
+      for (int b = 0; b < d; ++b) Hm(a, b) *= (mask ? mask[i * d + a] * mask[i * d + b] : 1);
+    if (Hm.isZero(0.0)) return;
+    for (Index b1 = P.indptr[i]; b1 < P.indptr[i + 1]; ++b1)
+      for (Index b2 = P.indptr[i]; b2 < P.indptr[i + 1]; ++b2)
+        add_delta(top, P.indices[b1], P.indices[b2], P.block(b1).transpose() * Hm * P.block(b2));
+  }
+
+  // Applies the pending changes level by level, each propagated to the next coarser level first.
+  void apply_deltas() {
+    for (int l = (int)lv_.size() - 1; l >= 0; --l) {
+      Level& L = lv_[l];
+      if (l > 0) {  // propagate before applying: the entries of delta_[l] are what changed on level l
+        const BlockMatrix<d>& Pl = P_[l - 1];
+        for (const auto& e : delta_[l])
+          for (Index b = Pl.indptr[e.i]; b < Pl.indptr[e.i + 1]; ++b)
+            for (Index b2 = Pl.indptr[e.j]; b2 < Pl.indptr[e.j + 1]; ++b2)
+              add_delta(l - 1, Pl.indices[b], Pl.indices[b2], Pl.block(b).transpose() * e.M * Pl.block(b2));
+      }
+      for (const auto& e : delta_[l]) {
+        L.A.block(e.pos) += e.M;
+        slot_[l][e.pos] = -1;
+      }
+      for (const auto& e : delta_[l]) invert_diagonal<d>(L.A, L.Dinv, L.inert, L.scale, e.i, e.i + 1);
+      delta_[l].clear();
+    }
+  }
+
+  void factorize_coarsest() {
+    const BlockMatrix<d>& A = lv_[0].A;
+    const Index n = A.rows * d;
+    std::vector<Eigen::Triplet<double>> t;
+    t.reserve(A.values.size());
+    for (Index i = 0; i < A.rows; ++i)
+      for (Index k = A.indptr[i]; k < A.indptr[i + 1]; ++k)
+        for (int a = 0; a < d; ++a)
+          for (int b = 0; b < d; ++b) {
+            const double v = A.block(k)(a, b);
+            if (v != 0 && !lv_[0].inert[i * d + a] && !lv_[0].inert[A.indices[k] * d + b]) t.emplace_back(i * d + a, A.indices[k] * d + b, v);
+          }
+    // empty rows (truncated or unused dofs) become identity rows: their right-hand side is zero
+    for (Index k = 0; k < n; ++k)
+      if (lv_[0].inert[k]) t.emplace_back(k, k, 1.0);
+    Eigen::SparseMatrix<double> S(n, n);
+    S.setFromTriplets(t.begin(), t.end());
+    // The pattern changes with the truncation (inert dofs, entries that cancel to zero): analysing
+    // it once and refactorizing a different pattern wrote out of bounds (tilted obstacles). The
+    // coarsest matrix is small, so it is analysed every time.
+    ldlt_.compute(S);
+    if (!factorization_ok()) {
+      // Truncation through rotated fine frames can make coarse dofs linearly dependent: the Galerkin
+      // matrix is then only semi-definite, with a right-hand side P~^T r in its range. Solving with
+      // A + eps diag(A) still lowers the energy (J(x) = -x^T A x / 2 - eps x^T D x <= 0).
+      for (Index k = 0; k < n; ++k) S.coeffRef(k, k) *= 1 + 1e-10;
+      ldlt_.compute(S);
+      if (!factorization_ok())
+        throw InputError("the coarsest-level matrix is singular: is rigid-body motion left free by the Dirichlet conditions?");
+    }
+  }
+
+  bool factorization_ok() const {
+    if (ldlt_.info() != Eigen::Success) return false;
+    const auto D = ldlt_.vectorD();
+    return D.minCoeff() > 1e-13 * D.cwiseAbs().maxCoeff();
+  }
+
+  std::vector<BlockMatrix<d>> P_;
+  std::vector<Level> lv_;
+  std::vector<GalerkinProduct<d>> gp_;
+  std::vector<std::vector<DeltaEntry>> delta_;  // pending incremental change of each level's A
+  std::vector<std::vector<Index>> slot_;        // position in A -> entry of delta_, or -1
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt_;
+  int rebuilds_ = 0, incremental_ = 0;
+  double rebuild_seconds_ = 0;
+};
+
+}  // namespace cmg

@@ -1,0 +1,82 @@
+// The loop around an iteration step: cycles until the correction norm ||u^{k+1} - u^k||_A meets
+// the tolerance (absolute tol, or rtol times the first correction), confirmed by one more
+// smoothing sweep; divergence and non-finite iterates end it with a message.
+//
+// A Step provides: double iterate(double* phases, bool& rebuilt) (one cycle, returns the energy
+// norm of its correction), void record(CycleRecord&) (energy and contact counts),
+// double error_against(const double* canonical_reference), double sweep_change() (||S(u) - u||_A
+// for one nonlinear sweep S, NaN where there is nothing to check).
+#pragma once
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include "solver/monitor.hpp"
+
+namespace cmg {
+
+// A stop on the correction norm is confirmed only if one more smoothing sweep moves the iterate by
+// at most this many times the tolerance (a sweep changes a converged iterate by about its error,
+// which is below the last correction; a limit cycle moves it by orders of magnitude more).
+constexpr double kSweepCheckFactor = 100;
+
+inline std::string fmt3(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3g", v);
+  return buf;
+}
+
+// Returns whether it converged; R gets the history, the cycle count and the status.
+template <class Step>
+bool run_loop(Step& step, const SolveOptions& opt, Monitor& mon, SolveResult& R, int outer) {
+  double first = -1;
+  R.status = "no convergence in " + std::to_string(opt.max_cycles) + " cycles";
+  for (int it = 1; it <= opt.max_cycles; ++it) {
+    mon.check_interrupt();
+    CycleRecord rec;
+    rec.correction_norm = step.iterate(mon.phases(), rec.rebuilt);
+    rec.cycle = ++R.cycles;
+    rec.outer = outer;
+    step.record(rec);
+    rec.seconds = mon.elapsed();
+    if (opt.reference) mon.untimed([&] { rec.error = step.error_against(opt.reference); });
+    R.history.push_back(rec);
+    mon.report(rec);
+    const double cn = rec.correction_norm;
+    if (first < 0) first = cn;
+    if (!std::isfinite(cn) || (cn > opt.divergence_factor * first && first > 0)) {
+      R.status = std::isfinite(cn)
+                     ? "diverged: correction norm " + fmt3(cn) + " at cycle " + std::to_string(it) + ", " + fmt3(cn / first) +
+                           " times the first"
+                     : "diverged: the iterate is no longer finite at cycle " + std::to_string(it) +
+                           " (overflow: are the load and the material of sensible magnitude?)";
+      R.converged = false;
+      return false;
+    }
+    if (cn <= opt.tol || cn <= opt.rtol * first) {
+      // The stopping test cannot tell a solution from an iterate that the cycle maps back onto
+      // itself while the smoother keeps moving it (a limit cycle of the nonlinear Gauss-Seidel,
+      // seen for Coulomb at large F). A solution is a fixed point of one sweep: check that.
+      PhaseClock pc(mon.phases());
+      const double sc = step.sweep_change();
+      if (!std::isnan(sc)) {
+        R.sweep_check = sc;
+        pc.lap(Phase::Check);
+      }
+      const double allowed = kSweepCheckFactor * std::max(opt.tol, opt.rtol * first);
+      if (R.sweep_check > allowed) {
+        R.converged = false;
+        R.status = "stalled: the cycle returns to an iterate (correction " + fmt3(cn) +
+                   ") that one more smoothing sweep still moves by " + fmt3(R.sweep_check) +
+                   " (energy norm): a limit cycle of the nonlinear smoother, not a solution";
+        return false;
+      }
+      R.converged = true;
+      R.status = "converged";
+      return true;
+    }
+  }
+  R.converged = false;
+  return false;
+}
+
+}  // namespace cmg

@@ -1,0 +1,148 @@
+// One cycle of (truncated) monotone multigrid for a contact law L -- Algorithm 2 of the paper for
+// Coulomb, truncated monotone multigrid for frictionless and Tresca, a linear cycle for
+// law::Linear: nu1 nonlinear Gauss-Seidel sweeps, the law's linearization at the smoothed iterate
+// (truncation, bounds, friction gradient and Hessian), the coarse correction of that problem,
+// nu2 sweeps back. The Step of run_loop (solver/loop_solver.hpp).
+#pragma once
+#include "mg/cycle.hpp"
+#include "solver/monitor.hpp"
+#include "steps/fine_iterate.hpp"
+#include "steps/nonlinear_gauss_seidel.hpp"
+
+namespace cmg {
+
+// What the coarse problem was built for: the truncation mask and the Hessian blocks of the fine
+// diagonal. The hierarchy is updated when the next linearization differs.
+template <int d>
+struct BuiltLinearization {
+  std::vector<std::uint8_t> mask;
+  std::vector<std::pair<Index, Mat<d>>> hessian;
+};
+
+template <int d>
+bool same_blocks(const std::vector<std::pair<Index, Mat<d>>>& a, const std::vector<std::pair<Index, Mat<d>>>& b) {
+  if (a.size() != b.size()) return false;
+  for (std::size_t k = 0; k < a.size(); ++k)
+    if (a[k].first != b[k].first || a[k].second != b[k].second) return false;
+  return true;
+}
+
+template <int d, class L>
+class MonotoneMultigridStep {
+  using Smoother = NonlinearGaussSeidel<d, L>;
+
+ public:
+  MonotoneMultigridStep(const ContactProblem<d>& P, GalerkinHierarchy<d>& H, CoarseCycle<d>& C, BuiltLinearization<d>& built,
+                        FineIterate<d>& it, const CycleOptions& opt)
+      : P_(P), H_(H), C_(C), built_(built), it_(it), opt_(opt) {
+    const Index n = P.num_nodes() * d;
+    mask_ = P.base_mask();
+    r_.assign(n, 0.0); w_.assign(n, 0.0); old_.assign(n, 0.0); tmp_.assign(n, 0.0);
+    lo_.assign(n, -kInf); hi_.assign(n, kInf);
+  }
+
+  double iterate(double* phases, bool& rebuilt) {
+    PhaseClock pc(phases);
+    std::vector<double>& u = it_.u;
+    const BlockMatrix<d>& A = P_.matrix();
+    const std::vector<double>& f = P_.load();
+    old_ = u;
+    for (int s = 0; s < opt_.nu1; ++s) Smoother::sweep(P_, u.data(), true);
+    pc.lap(Phase::PreSmooth);
+    A.multiply(u.data(), r_.data());
+    for (std::size_t k = 0; k < r_.size(); ++k) r_[k] = f[k] - r_[k];
+    const bool bounded = linearize();
+    pc.lap(Phase::Linearize);
+    rebuilt = mask_ != built_.mask || !same_blocks<d>(hessian_, built_.hessian);
+    if (rebuilt) {
+      H_.update(A, built_.mask.data(), mask_.data(), built_.hessian, hessian_);
+      built_.mask = mask_;
+      built_.hessian = hessian_;
+    }
+    pc.lap(Phase::CoarseUpdate);
+    C_.correction(opt_, r_.data(), mask_.data(), lo_.data(), hi_.data(), bounded, w_.data(), P_.num_nodes());
+    for (std::size_t k = 0; k < u.size(); ++k) u[k] += w_[k];
+    pc.lap(Phase::CoarseCorrection);
+    for (int s = 0; s < opt_.nu2; ++s) Smoother::sweep(P_, u.data(), false);
+    pc.lap(Phase::PostSmooth);
+    for (std::size_t k = 0; k < u.size(); ++k) old_[k] = u[k] - old_[k];
+    A.multiply(old_.data(), tmp_.data());
+    double e = 0;
+    for (std::size_t k = 0; k < u.size(); ++k) { e += old_[k] * tmp_[k]; it_.Au[k] += tmp_[k]; }
+    pc.lap(Phase::Norm);
+    return std::sqrt(std::max(e, 0.0));
+  }
+
+  // energy (with the Dirichlet offset and the friction term) and the contact counts
+  void record(CycleRecord& rec) const {
+    const std::vector<double>& u = it_.u, &Au = it_.Au, &f = P_.load();
+    double e = P_.energy_offset();
+    for (std::size_t k = 0; k < u.size(); ++k) e += 0.5 * u[k] * Au[k] - f[k] * u[k];
+    if constexpr (L::has_contact)
+      for (Index c = 0; c < P_.num_contact(); ++c) {
+        const Index k = P_.contact_node(c) * d;
+        const ContactNode p = P_.node(c);
+        e += friction_energy<L, d>(p, u.data() + k, f[k] - Au[k]);
+        const NodeState s = node_state<d>(p, u.data() + k);
+        if (s != NodeState::Free) { ++rec.active; (s == NodeState::Stick ? rec.stick : rec.slip)++; }
+      }
+    rec.energy = e;
+  }
+
+  // ||u - u*||_A with u* canonical (taken to the contact frames first)
+  double error_against(const double* ref) {
+    const std::vector<double>& u = it_.u;
+    const auto& fixed = P_.fixed();
+    w_.assign(ref, ref + u.size());
+    P_.basis().to_local(w_.data());
+    for (std::size_t k = 0; k < u.size(); ++k) old_[k] = fixed[k] ? 0.0 : u[k] - w_[k];
+    P_.matrix().multiply(old_.data(), tmp_.data());
+    double e = 0;
+    for (std::size_t k = 0; k < u.size(); ++k) e += old_[k] * tmp_[k];
+    return std::sqrt(std::max(e, 0.0));
+  }
+
+  // ||S(u) - u||_A for one forward nonlinear sweep S; u is left as it was. NaN for linear problems.
+  double sweep_change() {
+    if constexpr (!L::has_contact) return std::numeric_limits<double>::quiet_NaN();
+    std::vector<double>& u = it_.u;
+    old_ = u;
+    Smoother::sweep(P_, u.data(), true);
+    for (std::size_t k = 0; k < u.size(); ++k) std::swap(u[k], old_[k]);
+    for (std::size_t k = 0; k < u.size(); ++k) old_[k] -= u[k];
+    P_.matrix().multiply(old_.data(), tmp_.data());
+    double e = 0;
+    for (std::size_t k = 0; k < u.size(); ++k) e += old_[k] * tmp_[k];
+    return std::sqrt(std::max(e, 0.0));
+  }
+
+ private:
+  // The law's linearization at every contact node; returns whether any bound is finite.
+  bool linearize() {
+    hessian_.clear();
+    if constexpr (!L::has_contact) return false;
+    bool bounded = false;
+    const auto& base = P_.base_mask();
+    for (Index c = 0; c < P_.num_contact(); ++c) {
+      const Index i = P_.contact_node(c), k = i * d;
+      Mat<d> Hc = Mat<d>::Zero();
+      if (linearize_node<L, d>(P_.node(c), it_.u.data() + k, r_.data() + k, mask_.data() + k, base.data() + k, lo_.data() + k,
+                               hi_.data() + k, &Hc))
+        bounded = true;
+      if (!Hc.isZero(0.0)) hessian_.emplace_back(i, Hc);
+    }
+    return bounded;
+  }
+
+  const ContactProblem<d>& P_;
+  GalerkinHierarchy<d>& H_;
+  CoarseCycle<d>& C_;
+  BuiltLinearization<d>& built_;
+  FineIterate<d>& it_;
+  CycleOptions opt_;
+  std::vector<std::uint8_t> mask_;
+  std::vector<double> r_, w_, old_, tmp_, lo_, hi_;
+  std::vector<std::pair<Index, Mat<d>>> hessian_;
+};
+
+}  // namespace cmg
