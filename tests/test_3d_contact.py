@@ -13,7 +13,8 @@ from contactmg.hierarchy import MeshHierarchy
 from contactmg.material import Material
 from contactmg.mesh import Mesh
 from contactmg.obstacle import PlaneObstacle
-from contactmg.problem import ContactProblem, Dirichlet, _frames
+from contactmg.frames import contact_frames as _frames
+from contactmg.problem import ContactProblem, Dirichlet
 from contactmg.results import SLIP, STICK
 
 MAT = Material(100.0, 0.3)

@@ -54,11 +54,6 @@ def _block_diagonal(A) -> np.ndarray:
     return data[pos[np.argsort(rows[pos])]]
 
 
-def _frames(normals: np.ndarray) -> np.ndarray:
-    from .problem import _frames as frames
-    return frames(normals)
-
-
 def hierarchical_estimate(refined_problem, u_fine: np.ndarray, n_coarse: int, coarse_mesh: Mesh,
                           coarse_normal_stress: Optional[np.ndarray] = None,
                           coarse_contact_nodes: Optional[np.ndarray] = None,
@@ -90,7 +85,7 @@ def hierarchical_estimate(refined_problem, u_fine: np.ndarray, n_coarse: int, co
     on_new = local >= 0
     if np.any(on_new):
         ids = np.flatnonzero(on_new)
-        Q = _frames(c.normals[ids])
+        Q = c.frames[ids]
         bounds = _frozen_bounds(P, ids, n_coarse, coarse_normal_stress, coarse_contact_nodes)
         solve_node = getattr(_core, f"solve_node_tresca_{d}D")
         for j, k in enumerate(ids):

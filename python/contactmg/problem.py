@@ -431,8 +431,3 @@ def _holds_rigid_motion(x: np.ndarray, fixed: np.ndarray) -> bool:
         modes.append(r)
     R = np.stack([m[fixed] for m in modes], axis=1)
     return np.linalg.matrix_rank(R, tol=1e-10 * max(1.0, np.abs(R).max())) == len(modes)
-
-
-# The old private name, for callers written before frames.py (the 3D branch's tests); new code
-# uses contact_frames or result.contact_frames.
-_frames = contact_frames
