@@ -88,7 +88,7 @@ py::dict record_to_dict(const CycleRecord& r) {
   py::dict o;
   o["cycle"] = r.cycle; o["outer"] = r.outer; o["correction_norm"] = r.correction_norm; o["energy"] = r.energy;
   o["seconds"] = r.seconds; o["error"] = r.error; o["active"] = r.active; o["stick"] = r.stick; o["slip"] = r.slip;
-  o["rebuilt"] = r.rebuilt;
+  o["rebuilt"] = r.rebuilt; o["step_size"] = r.step_size; o["frozen_decrease"] = r.frozen_decrease;
   return o;
 }
 
@@ -103,7 +103,7 @@ py::dict result_to_dict(const SolveResult& R, const ContactSolver<d>& S) {
   out["state"] = to_numpy(R.state, {(py::ssize_t)nc});
   const py::ssize_t h = R.history.size();
   py::array_t<int> cyc(h), outer(h);
-  py::array_t<double> cn(h), en(h), sec(h), err(h);
+  py::array_t<double> cn(h), en(h), sec(h), err(h), step(h), fdec(h);
   py::array_t<Index> act(h), st(h), sl(h);
   py::array_t<bool> rb(h);
   for (py::ssize_t k = 0; k < h; ++k) {
@@ -111,10 +111,12 @@ py::dict result_to_dict(const SolveResult& R, const ContactSolver<d>& S) {
     cyc.mutable_at(k) = r.cycle; outer.mutable_at(k) = r.outer; cn.mutable_at(k) = r.correction_norm;
     en.mutable_at(k) = r.energy; sec.mutable_at(k) = r.seconds; err.mutable_at(k) = r.error; act.mutable_at(k) = r.active;
     st.mutable_at(k) = r.stick; sl.mutable_at(k) = r.slip; rb.mutable_at(k) = r.rebuilt;
+    step.mutable_at(k) = r.step_size; fdec.mutable_at(k) = r.frozen_decrease;
   }
   py::dict hist;
   hist["cycle"] = cyc; hist["outer"] = outer; hist["correction_norm"] = cn; hist["energy"] = en;
   hist["seconds"] = sec; hist["error"] = err; hist["active"] = act; hist["stick"] = st; hist["slip"] = sl; hist["rebuilt"] = rb;
+  hist["step_size"] = step; hist["frozen_decrease"] = fdec;
   out["history"] = hist;
   out["converged"] = R.converged;
   out["status"] = R.status;
@@ -206,7 +208,8 @@ void bind_dim(py::module_& m) {
            "fixed/fixed_values: Dirichlet components in canonical axes (a contact node keeps its contact condition "
            "in its free directions); frame_fixed/frame_values (nc, d): components fixed in the contact frames")
       .def("solve", [](CS& S, py::object u0, double tol, double rtol, int max_cycles, bool fixed_point, double fp_tol,
-                       int fp_max, py::object reference, py::object cycle, py::object nu1, py::object nu2, py::object progress) {
+                       int fp_max, py::object reference, py::object cycle, py::object nu1, py::object nu2, py::object progress,
+                       bool tnnmg) {
              SolveOptions o;
              o.tol = tol; o.rtol = rtol; o.max_cycles = max_cycles; o.fixed_point_tol = fp_tol; o.fixed_point_max = fp_max;
              if (!(tol >= 0) || !(rtol >= 0) || !(tol > 0 || rtol > 0)) throw InputError("tolerances must be >= 0, one of them > 0");
@@ -217,6 +220,7 @@ void bind_dim(py::module_& m) {
              if (!nu2.is_none()) co.nu2 = nu2.cast<int>();
              check_smoothing_steps(co.nu1, co.nu2);
              if (!progress.is_none() && !PyCallable_Check(progress.ptr())) throw InputError("progress must be callable or None");
+             if (tnnmg && fixed_point) throw InputError("tnnmg and fixed_point are two methods: choose one");
              DArr u;
              const double* up = nullptr;
              if (!u0.is_none()) {
@@ -243,7 +247,7 @@ void bind_dim(py::module_& m) {
              bool interrupted = false;
              {
                py::gil_scoped_release release;
-               try { R = fixed_point ? S.solve_fixed_point(up, o, co) : S.solve(up, o, co); }
+               try { R = fixed_point ? S.solve_fixed_point(up, o, co) : tnnmg ? S.solve_tnnmg(up, o, co) : S.solve(up, o, co); }
                catch (const Interrupted&) { interrupted = true; }
              }
              S.monitor().interrupted = nullptr;
@@ -256,7 +260,8 @@ void bind_dim(py::module_& m) {
            py::arg("u0") = py::none(), py::arg("tol") = 1e-11, py::arg("rtol") = 0.0, py::arg("max_cycles") = 200,
            py::arg("fixed_point") = false, py::arg("fixed_point_tol") = 1e-9, py::arg("fixed_point_max") = 100,
            py::arg("reference") = py::none(), py::arg("cycle") = py::none(), py::arg("nu1") = py::none(),
-           py::arg("nu2") = py::none(), py::arg("progress") = py::none(),
+           py::arg("nu2") = py::none(), py::arg("progress") = py::none(), py::arg("tnnmg") = false,
+           "tnnmg: truncated nonsmooth Newton multigrid steps instead of monotone multigrid cycles; "
            "cycle, nu1, nu2 override the constructor's for this solve; progress(record: dict) is called after every "
            "cycle (cycle, outer, correction_norm, energy, seconds, error, active, stick, slip, rebuilt)")
       .def("smooth", [](CS& S, DArr u0, int sweeps) {

@@ -5,6 +5,7 @@
 #pragma once
 #include "laws/law.hpp"
 #include "steps/fixed_point_step.hpp"
+#include "steps/tnnmg_step.hpp"
 
 namespace cmg {
 
@@ -58,6 +59,20 @@ class ContactSolver {
     });
   }
   SolveResult solve(const double* u0, const SolveOptions& opt) { return solve(u0, opt, cyc_); }
+
+  // Truncated nonsmooth Newton multigrid steps (steps/tnnmg_step.hpp) from u0, same stop rules.
+  SolveResult solve_tnnmg(const double* u0, const SolveOptions& opt, const CycleOptions& cyc) {
+    return with_law(law_, [&](auto L) {
+      using Law = decltype(L);
+      start(u0);
+      P_.set_bounds_to_coefficients();
+      SolveResult R;
+      TnnmgStep<d, Law> step(P_, H_, C_, built_, it_, cyc);
+      run_loop(step, opt, mon_, R, 0);
+      finish<Law>(R);
+      return R;
+    });
+  }
 
   // Algorithm 1 (Coulomb only).
   SolveResult solve_fixed_point(const double* u0, const SolveOptions& opt, const CycleOptions& cyc) {

@@ -22,6 +22,10 @@ struct CycleRecord {
   double error = std::numeric_limits<double>::quiet_NaN();  // ||u - u*||_A when a reference is given
   Index active = 0, stick = 0, slip = 0;
   bool rebuilt = false;
+  // TNNMG only (NaN otherwise): the line search's step length and the decrease of the frozen-bound
+  // energy by the correction and line search
+  double step_size = std::numeric_limits<double>::quiet_NaN();
+  double frozen_decrease = std::numeric_limits<double>::quiet_NaN();
 };
 
 // Where a solve spends its time (SolveResult::phase_seconds): a handful of clock reads per cycle.

@@ -75,7 +75,7 @@ def _parser() -> argparse.ArgumentParser:
     h.add_argument("--levels", type=_positive_int("--levels", 1, MAX_LEVELS), default=6,
                    help="levels in all; level 1 is the coarse mesh")
     h.add_argument("--friction", type=_nonneg_float("--friction"), default=0.4)
-    h.add_argument("--method", choices=["nmg", "fixed-point", "linear"], default="nmg")
+    h.add_argument("--method", choices=["nmg", "fixed-point", "linear", "tnnmg"], default="nmg")
     h.add_argument("--tol", type=_nonneg_float("--tol", positive=True), default=1e-11)
     h.add_argument("--max-cycles", type=_positive_int("--max-cycles", 1, MAX_CYCLES), default=200)
     h.add_argument("--cycle", choices=["V", "W", "F"], default="F")

@@ -14,7 +14,7 @@ def _common(p, levels_default):
     p.add_argument("--levels", type=cli._positive_int("--levels", 1, MAX_LEVELS_3D), default=levels_default,
                    help="levels in all; level 1 is the coarse mesh")
     p.add_argument("--friction", type=cli._nonneg_float("--friction"), default=0.4)
-    p.add_argument("--method", choices=["nmg", "fixed-point", "linear"], default="nmg")
+    p.add_argument("--method", choices=["nmg", "fixed-point", "linear", "tnnmg"], default="nmg")
     p.add_argument("--tol", type=cli._nonneg_float("--tol", positive=True), default=1e-11)
     p.add_argument("--max-cycles", type=cli._positive_int("--max-cycles"), default=200)
     p.add_argument("--cycle", choices=["V", "W", "F"], default="F")

@@ -20,7 +20,7 @@ from .results import ContactResult
 
 VectorField = Union[Sequence[float], np.ndarray, Callable[[np.ndarray], np.ndarray]]
 
-METHODS = ("nmg", "fixed-point", "linear")
+METHODS = ("nmg", "fixed-point", "linear", "tnnmg")
 CYCLES = ("V", "W", "F")
 INT32_MAX = 2 ** 31 - 1  # the core counts cycles in a C int
 # The redesigned core (issue 9) takes cycle, nu1, nu2 and a progress callback per solve; an older
@@ -329,8 +329,10 @@ class ContactProblem:
               nu1: Optional[int] = None, nu2: Optional[int] = None,
               progress: Optional[Callable[[dict], None]] = None) -> ContactResult:
         """Solve with `method`: "nmg" (Algorithm 2 for Coulomb; truncated monotone multigrid for
-        frictionless and Tresca; linear multigrid without contact), "fixed-point" (Algorithm 1,
-        Coulomb only) or "linear" (the cost reference: the linear problem with the contact state of
+        frictionless and Tresca; linear multigrid without contact), "tnnmg" (truncated nonsmooth
+        Newton multigrid: the fine nonlinear sweeps, one linear cycle for the truncated Newton
+        system, projection and an exact line search of the frozen-bound energy),
+        "fixed-point" (Algorithm 1, Coulomb only) or "linear" (the cost reference: the linear problem with the contact state of
         `reference` — or of an nmg solve made first — known in advance, started from zero).
         cycle ("V", "W", "F"), nu1 and nu2 (pre- and post-smoothing sweeps) default to the
         problem's; changing them re-uses the assembled problem (a core solver is built once per
@@ -365,8 +367,12 @@ class ContactProblem:
                 raise ValueError("the fixed-point method (Algorithm 1) needs Coulomb friction on a contact boundary")
             solver = self.core_solver(options.cycle, options.nu1, options.nu2)
             return self._result(solver.solve(u0, fixed_point=True, **kw), method, options)
-        if method == "nmg":
+        if method in ("nmg", "tnnmg"):
             solver = self.core_solver(options.cycle, options.nu1, options.nu2)
+            if method == "tnnmg":
+                if not SOLVE_TAKES_CYCLE_OPTIONS:
+                    raise ValueError("method 'tnnmg' needs the redesigned core (issue 9)")
+                kw["tnnmg"] = True
             return self._result(solver.solve(u0, **kw), method, options)
         if reference is None:
             reference = self.solve("nmg", tol=tol, rtol=rtol, max_cycles=max_cycles, cycle=options.cycle,
