@@ -24,7 +24,7 @@ E, NU, RADIUS = 2000.0, 0.28, 0.4
 FACE_DISPLACEMENT = 0.005
 # the possible contact zone: the nonmortar arc within |x| < ZONE (the Hertz half-width is ~0.03)
 ZONE = 0.5 * RADIUS
-SEARCH = 0.5 * RADIUS
+SEARCH = RADIUS
 
 
 def lower_half_disk(segments: int = 5) -> Mesh:
