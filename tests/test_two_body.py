@@ -274,3 +274,24 @@ def test_two_body_hertz_level7_against_the_formulas():
     assert abs(r.contact_halfwidth - a) <= np.pi * RADIUS / (12 * 2 ** 6)
     p0 = two_body_peak_pressure(load, RADIUS, RADIUS, m, m)
     assert abs(np.abs(r.normal_stress).max() - p0) <= 0.03 * p0
+
+
+def test_two_body_bad_input_is_a_clear_error():
+    upper, lower = _blocks()
+    bodies = [Body(upper, MAT, [Dirichlet([RECT_TOP], (0.0, -0.01))]), Body(lower, MAT, [Dirichlet([RECT_BOTTOM], (0.0, 0.0))])]
+    pair = ContactPair(0, 1, [RECT_BOTTOM], [RECT_TOP], search=0.1)
+    with pytest.raises(ValueError, match="two different bodies"):
+        TwoBodyProblem(bodies, ContactPair(0, 0, [RECT_BOTTOM], [RECT_TOP], search=0.1))
+    with pytest.raises(ValueError, match="search distance"):
+        TwoBodyProblem(bodies, ContactPair(0, 1, [RECT_BOTTOM], [RECT_TOP], search=-1.0))
+    with pytest.raises(ValueError, match="same number of levels"):
+        TwoBodyProblem([bodies[0], Body(lower.truncated(2), MAT, bodies[1].dirichlet)], pair)
+    with pytest.raises(ValueError, match="mortar tags"):
+        TwoBodyProblem(bodies, ContactPair(0, 1, [RECT_BOTTOM], [99], search=0.1))
+    far = MeshHierarchy.build(rectangle(5, 3, 1, 1, origin=(0.0, -3.0)), 3)  # 2 below the upper block
+    with pytest.raises(ValueError, match="sees the mortar boundary"):
+        TwoBodyProblem([bodies[0], Body(far, MAT, bodies[1].dirichlet)], pair)
+    with pytest.raises(ValueError, match="rigid-body motion"):
+        TwoBodyProblem([Body(upper, MAT, []), bodies[1]], pair)
+    with pytest.raises(TypeError):
+        TwoBodyProblem(bodies, pair, friction="coulomb")
