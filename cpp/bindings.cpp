@@ -145,6 +145,36 @@ void bind_dim(py::module_& m) {
       .def_property_readonly("indptr", [](const BM& A) { return to_numpy(A.indptr, {(py::ssize_t)A.indptr.size()}); })
       .def_property_readonly("indices", [](const BM& A) { return to_numpy(A.indices, {(py::ssize_t)A.indices.size()}); })
       .def_property_readonly("data", [](const BM& A) { return to_numpy(A.values, {(py::ssize_t)A.nnz(), d, d}); })
+      .def(py::init([](Index rows, Index cols, IArr indptr, IArr indices, DArr data) {
+             // from block CSR arrays (scipy's bsr_matrix with d x d blocks): a matrix built outside
+             // the assembly, e.g. T^T A T of the two-body mortar transformation
+             check_block_count(rows);
+             check_block_count(cols);
+             const py::ssize_t nnz = indices.size();
+             require_shape(indptr, "indptr", {(py::ssize_t)rows + 1});
+             require_shape(data, "data", {nnz, d, d});
+             auto A = std::make_shared<BM>();
+             A->rows = rows;
+             A->cols = cols;
+             A->indptr.assign(indptr.data(), indptr.data() + rows + 1);
+             if (A->indptr[0] != 0 || A->indptr[rows] != (Index)nnz) throw InputError("indptr does not match indices");
+             for (Index i = 0; i < rows; ++i) {
+               if (A->indptr[i + 1] < A->indptr[i]) throw InputError("indptr must not decrease");
+               for (Index k = A->indptr[i]; k < A->indptr[i + 1]; ++k) {
+                 const Index j = indices.data()[k];
+                 if (j < 0 || j >= cols) throw InputError("a block column index is out of range");
+                 if (k > A->indptr[i] && j <= indices.data()[k - 1]) throw InputError("block columns must be sorted and unique per row");
+               }
+             }
+             A->indices.assign(indices.data(), indices.data() + nnz);
+             A->values.assign(data.data(), data.data() + nnz * d * d);
+             for (double v : A->values)
+               if (!std::isfinite(v)) throw InputError("the matrix has a non-finite entry");
+             A->find_diagonal();
+             return A;
+           }),
+           py::arg("rows"), py::arg("cols"), py::arg("indptr"), py::arg("indices"), py::arg("data"),
+           "from block CSR arrays: rows, cols in blocks, data (nnz, d, d)")
       .def("memory_bytes", &BM::memory_bytes)
       .def("matvec", [](const BM& A, DArr x) {
         require_shape(x, "x", {(py::ssize_t)A.cols, d});

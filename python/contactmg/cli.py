@@ -96,6 +96,8 @@ def _parser() -> argparse.ArgumentParser:
     t.add_argument("-q", "--quiet", action="store_true")
     from . import cli_3d
     cli_3d.add_parsers(sub)
+    from . import cylinders
+    cylinders.add_parser(sub)
     return p
 
 
@@ -189,6 +191,9 @@ def main(argv: Optional[List[str]] = None) -> int:
     try:
         if args.command == "hertz":
             return run_hertz(args)
+        if args.command == "cylinders":
+            from .cylinders import run_cylinders
+            return run_cylinders(args)
         from .cli_3d import COMMANDS
         if args.command in COMMANDS:
             return COMMANDS[args.command](args)

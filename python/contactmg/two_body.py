@@ -1,0 +1,218 @@
+"""Elastic bodies in frictional contact with each other (2D), through the dual mortar basis
+transformation of Wohlmuth & Krause (2003).
+
+The bodies are assembled one by one (each a ContactProblem without contact: its own hierarchy,
+material, Dirichlet data and loads) into a block-diagonal A. One contact pair couples the
+nonmortar boundary of one body with the mortar boundary of another (mortar.py). The change of
+basis u = T w, T = I + N (N = D^{-1} M on the nonmortar contact rows and mortar columns), makes the
+nonmortar unknowns the relative displacements w_p = u_p - (D^{-1} M u_m)_p, and the coupled
+conditions nodal: the core then solves the problem T^T A T, T^T f with its own nodal solvers,
+truncation and monotone multigrid, in the nodal frames of the nonmortar normals. T^{-1} = I - N
+(N^2 = 0: no node is both nonmortar and mortar), so the fine prolongation T^{-1} P is again a
+scalar interpolation (weights may be negative), and each body keeps its own coarse levels: the
+coarse spaces are the union of the two bodies' coarse spaces, coupled only through the
+transformed fine level, where the Galerkin products T^{-1}P^T (T^T A T) T^{-1}P = P^T A P are the
+untransformed, uncoupled ones plus the truncation. The friction law acts on the tangential part of
+w: the relative tangential displacement.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Callable, Dict, Optional, Sequence
+
+import numpy as np
+import scipy.sparse as sp
+
+from . import _core
+from .frames import contact_frames
+from .friction import Coulomb, Frictionless, Tresca
+from .hierarchy import MeshHierarchy, Transfer
+from .material import Material
+from .mesh import Mesh
+from .mortar import MortarCoupling, mortar_coupling_2d
+from .problem import ContactBoundary, ContactProblem, CycleOptions, Dirichlet, tag_tuple
+
+
+@dataclass
+class Body:
+    """One elastic body: its hierarchy, material, Dirichlet data and surface loads."""
+
+    hierarchy: MeshHierarchy
+    material: Material
+    dirichlet: Sequence[Dirichlet] = ()
+    traction: Optional[Dict[int, object]] = None
+    body_force: Optional[object] = None
+
+
+@dataclass
+class ContactPair:
+    """Body `nonmortar` (the slave side, carrying the multiplier) against body `mortar` (the master
+    side), on the facets with the given tags; `region(midpoints) -> bool` restricts the nonmortar
+    facets (the possible contact zone); `search`: how far along its normal a nonmortar point looks
+    for the mortar boundary."""
+
+    nonmortar: int
+    mortar: int
+    nonmortar_tags: Sequence[int]
+    mortar_tags: Sequence[int]
+    search: float
+    region: Optional[Callable[[np.ndarray], np.ndarray]] = None
+
+
+def _bsr(A, n: int, d: int) -> sp.bsr_matrix:
+    return sp.bsr_matrix((np.asarray(A.data), np.asarray(A.indices), np.asarray(A.indptr)), shape=(n * d, n * d))
+
+
+def _block_matrix(A: sp.spmatrix, d: int):
+    B = sp.bsr_matrix(A, blocksize=(d, d))
+    B.sort_indices()
+    cls = _core.BlockMatrix2D if d == 2 else _core.BlockMatrix3D
+    n = B.shape[0] // d
+    return cls(n, n, B.indptr.astype(np.int64), B.indices.astype(np.int64), np.ascontiguousarray(B.data))
+
+
+def _scalar_transfer(P: sp.csr_matrix) -> Transfer:
+    P = sp.csr_matrix(P)
+    P.eliminate_zeros()
+    P.sort_indices()
+    return Transfer(P.shape[0], P.shape[1], P.indptr.astype(np.int64), P.indices.astype(np.int64),
+                    P.data.astype(float))
+
+
+class TwoBodyProblem(ContactProblem):
+    """Bodies in contact through one mortar pair (2D). solve() and its methods ("nmg",
+    "fixed-point", "linear") are those of ContactProblem, on the transformed problem; the result's
+    displacement is the canonical u = T w on the union mesh (`mesh`, with `body_id` per node), its
+    contact quantities those of the nonmortar nodes (contact_force: the nonmortar nodal force in the
+    frames, measure: D, so normal_stress is the dual multiplier)."""
+
+    def __init__(self, bodies: Sequence[Body], pair: ContactPair, friction=None, cycle: str = "F", nu1: int = 3,
+                 nu2: int = 3):
+        t0 = time.perf_counter()
+        bodies = list(bodies)
+        if len(bodies) < 2 or not all(isinstance(b, Body) for b in bodies):
+            raise TypeError("bodies must be a sequence of at least two Body")
+        if not isinstance(pair, ContactPair):
+            raise TypeError("pair must be a ContactPair")
+        if pair.nonmortar == pair.mortar or not all(0 <= k < len(bodies) for k in (pair.nonmortar, pair.mortar)):
+            raise ValueError("the contact pair needs two different bodies of the problem")
+        friction = Frictionless() if friction is None else friction
+        if not isinstance(friction, (Frictionless, Tresca, Coulomb)):
+            raise TypeError("friction must be Frictionless(), Tresca(bound) or Coulomb(F)")
+        levels = {b.hierarchy.levels for b in bodies}
+        if len(levels) != 1:
+            raise ValueError(f"the bodies' hierarchies need the same number of levels, got {sorted(levels)}")
+        if any(b.hierarchy.finest.dim != 2 for b in bodies):
+            raise ValueError("two-body contact is 2D (the mortar projection of 3D surfaces is not built)")
+        self.bodies, self.pair = bodies, pair
+        self.default_cycle = CycleOptions(cycle, nu1, nu2)
+        self.friction = friction
+        self.benchmark = None
+        # each body on its own: assembly, Dirichlet data, its rigid motions held (no contact relied on)
+        self.parts = [ContactProblem(b.hierarchy, b.material, b.dirichlet, body_force=b.body_force,
+                                     traction=b.traction) for b in bodies]
+        d = 2
+        sizes = [p.mesh.num_points for p in self.parts]
+        self.offsets = np.r_[0, np.cumsum(sizes)].astype(np.int64)
+        n = int(self.offsets[-1])
+        self.mesh = _union_mesh([p.mesh for p in self.parts], self.offsets)
+        self.body_id = np.repeat(np.arange(len(bodies)), sizes).astype(np.int32)
+        self.hierarchy = bodies[pair.nonmortar].hierarchy  # for reports (kind, levels)
+        self.material = bodies[pair.nonmortar].material
+        self.coupling = self._coupling()
+        c = self.coupling
+        keep = c.covered & ~self.parts[pair.nonmortar].fixed[c.nonmortar_nodes].any(axis=1)
+        if not np.any(keep):
+            raise ValueError("no nonmortar node of the contact pair sees the mortar boundary within the search "
+                             "distance (or every one is held by Dirichlet data)")
+        sm, mm = self.parts[pair.nonmortar].mesh, self.parts[pair.mortar].mesh
+        gaps = c.gaps(sm.points, mm.points)[keep]
+        normals = np.ascontiguousarray(c.normals[keep])
+        Mhat = c.Mhat[keep].tocoo()
+        nodes = c.nonmortar_nodes[keep] + self.offsets[pair.nonmortar]
+        # N: nonmortar contact rows, mortar columns, in the union numbering; T = I + N, T^{-1} = I - N
+        self.N = sp.csr_matrix((Mhat.data, (nodes[Mhat.row], Mhat.col + self.offsets[pair.mortar])), shape=(n, n))
+        Tk = sp.kron(sp.identity(n) + self.N, sp.identity(d), format="csr")
+        A = sp.block_diag([_bsr(p.A, p.mesh.num_points, d) for p in self.parts], format="csr")
+        self.A_canonical = A
+        self.load_canonical = np.vstack([p.load for p in self.parts])
+        self.A = _block_matrix((Tk.T @ A @ Tk).tocsr(), d)
+        self.load = (Tk.T @ self.load_canonical.ravel()).reshape(n, d)
+        self.fixed = np.vstack([p.fixed for p in self.parts])
+        self.fixed_values = np.vstack([p.fixed_values for p in self.parts])
+        measure = c.D[keep]
+        facets = sm.facets[self._nonmortar_facet_mask()] + self.offsets[pair.nonmortar]
+        self.contact = ContactBoundary(nodes.astype(np.int64), normals, np.ascontiguousarray(gaps), measure,
+                                       facets=np.ascontiguousarray(facets), frames=contact_frames(normals))
+        self.coefficients = friction.coefficients(self.contact.nodes, measure)
+        self.transfers = self._transfers()
+        self._solvers = {}
+        self._build_seconds = {}
+        self.assembly_seconds = time.perf_counter() - t0 + sum(b.hierarchy.build_seconds for b in bodies)
+
+    # -- the pieces ----------------------------------------------------------------------------
+    def _nonmortar_facet_mask(self) -> np.ndarray:
+        m = self.parts[self.pair.nonmortar].mesh
+        sel = np.isin(m.facet_tags, list(tag_tuple(self.pair.nonmortar_tags, "nonmortar_tags")))
+        if self.pair.region is not None:
+            sel &= np.asarray(self.pair.region(m.points[m.facets].mean(axis=1)), dtype=bool)
+        if not np.any(sel):
+            raise ValueError(f"no facet of body {self.pair.nonmortar} carries the nonmortar tags "
+                             f"{list(self.pair.nonmortar_tags)} (in the region)")
+        return sel
+
+    def _coupling(self) -> MortarCoupling:
+        sm, mm = self.parts[self.pair.nonmortar].mesh, self.parts[self.pair.mortar].mesh
+        msel = np.isin(mm.facet_tags, list(tag_tuple(self.pair.mortar_tags, "mortar_tags")))
+        if not np.any(msel):
+            raise ValueError(f"no facet of body {self.pair.mortar} carries the mortar tags {list(self.pair.mortar_tags)}")
+        return mortar_coupling_2d(sm.points, sm.facets[self._nonmortar_facet_mask()], mm.points, mm.facets[msel],
+                                  self.pair.search)
+
+    def _transfers(self):
+        """Per level the union of the bodies' interpolations; on the finest, T^{-1} P = (I - N) P."""
+        levels = self.bodies[0].hierarchy.levels
+        out = []
+        for l in range(levels - 1):
+            P = sp.block_diag([b.hierarchy.transfers[l].matrix() for b in self.bodies], format="csr")
+            if l == levels - 2:
+                P = (sp.identity(P.shape[0]) - self.N) @ P
+            out.append(_scalar_transfer(P))
+        return out
+
+    def to_canonical(self, w: np.ndarray) -> np.ndarray:
+        """u = T w = w + N w."""
+        return w + self.N @ w
+
+    def _new_core_solver(self, law: str, options: CycleOptions, frame_fixed=None, frame_values=None, load=None):
+        c = self.contact
+        return _core.ContactSolver2D(self.A, self.load if load is None else load, self.fixed, self.fixed_values,
+                                     c.nodes, c.normals, c.gaps, self.coefficients, law,
+                                     [t.as_tuple() for t in self.transfers], options.cycle, options.nu1, options.nu2,
+                                     frame_fixed=frame_fixed, frame_values=frame_values)
+
+    def _result(self, raw: dict, method: str, options: CycleOptions):
+        raw = dict(raw)
+        raw["u"] = self.to_canonical(np.asarray(raw["u"]))
+        res = super()._result(raw, method, options)
+        res.extra["body_id"] = self.body_id
+        return res
+
+    def write_vtu(self, path, result) -> None:
+        """One VTU file with both bodies: the result's point data and a body_id field."""
+        from .io import write_mesh
+
+        data = result.point_data()
+        data["body_id"] = self.body_id
+        write_mesh(path, self.mesh, point_data=data)
+
+
+def _union_mesh(meshes: Sequence[Mesh], offsets: np.ndarray) -> Mesh:
+    cell_types = {m.cell_type for m in meshes}
+    if len(cell_types) != 1:
+        raise ValueError(f"the bodies need one cell type for one output mesh, got {sorted(cell_types)}")
+    return Mesh._trusted(np.vstack([m.points for m in meshes]),
+                         np.vstack([m.cells + o for m, o in zip(meshes, offsets)]), meshes[0].cell_type,
+                         np.vstack([m.facets + o for m, o in zip(meshes, offsets)]),
+                         np.concatenate([m.facet_tags for m in meshes]))
