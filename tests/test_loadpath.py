@@ -244,3 +244,15 @@ def test_cli_cork_push_and_pull_back_dissipates():
     assert s[2]["push_force"] < s[0]["push_force"]  # the same plunger position, D / 2
     r = run("cork", "--levels", "2", "--pull-back-steps", "2")
     assert r.returncode == 2 and "--pull-back" in r.stderr.strip().splitlines()[-1]
+
+
+def test_fixed_point_path_reaches_the_nmg_path():
+    """Algorithm 1 on the same incremental steps (Tresca solves with the bound of the previous
+    outer iterate, friction on the increment) reaches the steps of Algorithm 2 (F = 0.4: unique)."""
+    p = hertz_problem("triangle", 4, F, coulomb_at_zero=True)
+    path = shear_path(p, 2, 0.001, 1)
+    a, b = path.solve("nmg", tol=1e-12), path.solve("fixed-point", tol=1e-12)
+    assert a.converged and b.converged
+    for x, y in zip(a.steps, b.steps):
+        assert np.abs(x.displacement - y.displacement).max() <= 1e-7 * np.abs(x.displacement).max()
+        assert np.array_equal(x.node_state, y.node_state)
