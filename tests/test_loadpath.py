@@ -256,3 +256,25 @@ def test_fixed_point_path_reaches_the_nmg_path():
     for x, y in zip(a.steps, b.steps):
         assert np.abs(x.displacement - y.displacement).max() <= 1e-7 * np.abs(x.displacement).max()
         assert np.array_equal(x.node_state, y.node_state)
+
+
+def test_3d_friction_force_opposes_the_slip_increment():
+    """Sphere (3D, two tangential components): normal loading then a shear along x; at every
+    sliding node the tangential force is -F |n| times the unit slip increment, at every sticking
+    node the increment is exactly zero and |t| <= F |n|."""
+    from contactmg.generators_3d import BALL_TOP
+    from contactmg.sphere import DISPLACEMENT, sphere_problem
+
+    p = sphere_problem("hexahedron", 2, F)
+    res = two_phase_path(p, [BALL_TOP], (0.0, 0.0, -DISPLACEMENT), 2, (0.008, 0.0, 0.0), 2).solve(tol=1e-11)
+    assert res.converged
+    for r in res.steps:
+        s, inc = r.contact_state, r.extra["slip_increment"]
+        n, t = np.abs(r.contact_force[:, 0]), r.contact_force[:, 1:]
+        scale = n.max()
+        stick, slip = s == STICK, s == SLIP
+        assert np.all(inc[stick] == 0)
+        assert np.all(np.linalg.norm(t[stick], axis=1) <= F * n[stick] + 1e-9 * scale)
+        unit = inc[slip] / np.linalg.norm(inc[slip], axis=1)[:, None]
+        assert np.abs(t[slip] + F * n[slip][:, None] * unit).max(initial=0.0) <= 1e-8 * scale
+    assert (res.last.contact_state == SLIP).sum() > (res.steps[1].contact_state == SLIP).sum()
