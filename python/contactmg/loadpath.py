@@ -155,7 +155,7 @@ class LoadPath:
             build = time.perf_counter() - t0
             raw = core.solve(previous if warm_start else None, **kw)
             res = ContactResult.from_raw(p, raw, method)
-            res.setup_seconds = build
+            res.setup_seconds = p.assembly_seconds + build  # hierarchy, assembly and this step's core build
             res.extra.update(step=k + 1, parameter=data.parameter, build_seconds=build,
                              slip_increment=self._slip_increment(res, previous))
             steps.append(res)
