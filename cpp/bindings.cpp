@@ -318,6 +318,15 @@ void bind_dim(py::module_& m) {
              if (l < 0 || l >= S.hierarchy().num_coarse_levels()) throw py::index_error("no such coarse level");
              S.coarse_cycle().set_rows_to_smooth(l, SweepOrder(std::vector<Index>(rows.data(), rows.data() + rows.size())));
            }, py::arg("level"), py::arg("rows"), "the rows smoothed on coarse level `level` (all by default)")
+      .def("set_slip_origin", [](CS& S, py::object u_prev) {
+             if (u_prev.is_none()) { S.set_slip_origin(nullptr); return; }
+             DArr u = u_prev.cast<DArr>();
+             require_shape(u, "u_prev", {(py::ssize_t)S.num_nodes(), d});
+             S.set_slip_origin(u.data());
+           }, py::arg("u_prev"),
+           "Load paths: the previous step's displacement (n, d), canonical; friction then acts on the slip "
+           "increment u_T - u_prev_T and stick means no slip in this step. None: from the reference configuration")
+      .def_property_readonly("has_slip_origin", &CS::has_slip_origin)
       .def("fine_matrix", [](const CS& S) { return std::make_shared<BM>(S.fine_matrix()); })
       .def("memory_bytes", &CS::memory_bytes)
       .def("rebuild_coarse", &CS::rebuild_coarse, "Full Galerkin rebuild of the coarse matrices for the current truncation");

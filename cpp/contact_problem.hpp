@@ -91,7 +91,23 @@ class ContactProblem {
   Index contact_node(Index c) const { return node_[c]; }
   Index contact_of_node(Index i) const { return contact_of_node_[i]; }
   const std::vector<Index>& contact_nodes() const { return node_; }
-  ContactNode node(Index c) const { return {gap_[c], coef_[c], bound_[c], free_[c]}; }
+  ContactNode node(Index c) const {
+    return {gap_[c], coef_[c], bound_[c], free_[c], origin_.empty() ? nullptr : origin_.data() + c * d};
+  }
+  // The previous step of a load path (DESIGN section 12): friction acts on u_T - u_prev_T from now
+  // on. u_prev is canonical (n * d); nullptr clears it (the path's first step from u = 0).
+  void set_slip_origin(const double* u_prev) {
+    if (!u_prev) { origin_.clear(); return; }
+    const Index n = num_nodes();
+    for (Index k = 0; k < n * d; ++k)
+      if (!std::isfinite(u_prev[k])) throw InputError("the previous displacement of the load path has a non-finite entry");
+    std::vector<double> u(u_prev, u_prev + n * d);
+    T_.to_local(u.data());
+    origin_.assign(num_contact() * d, 0.0);
+    for (Index c = 0; c < num_contact(); ++c)
+      for (int a = 0; a < d; ++a) origin_[c * d + a] = u[node_[c] * d + a];
+  }
+  bool has_slip_origin() const { return !origin_.empty(); }
   double energy_offset() const { return energy_offset_; }
   std::size_t memory_bytes() const { return A_.memory_bytes() + sizeof(double) * (Dinv_.size() + 3 * f_.size()); }
 
@@ -133,6 +149,7 @@ class ContactProblem {
   std::vector<std::uint8_t> fixed_, inert_, base_mask_;
   std::vector<Index> node_, contact_of_node_;
   std::vector<double> gap_, coef_, bound_;
+  std::vector<double> origin_;  // nc * d in the frames, empty without a previous step
   std::vector<TangentMask> free_;
   double energy_offset_ = 0;
 };

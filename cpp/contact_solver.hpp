@@ -42,6 +42,9 @@ class ContactSolver {
   std::size_t memory_bytes() const {
     return P_.memory_bytes() + H_.memory_bytes() + C_.memory_bytes() + sizeof(double) * 9 * P_.num_nodes() * d;
   }
+  // Load paths: friction on the slip increment from the canonical displacement u_prev (nullptr: none).
+  void set_slip_origin(const double* u_prev) { P_.set_slip_origin(u_prev); }
+  bool has_slip_origin() const { return P_.has_slip_origin(); }
   // Full Galerkin rebuild for the current linearization (diagnostics: compare with the incremental one).
   void rebuild_coarse() { H_.rebuild(P_.matrix(), built_.mask.data(), built_.hessian); }
 

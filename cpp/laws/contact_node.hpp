@@ -14,7 +14,35 @@ struct ContactNode {
   double coef;        // friction coefficient F_p (Coulomb) or the given bound (Tresca)
   double bound;       // the Tresca bound in force (= coef, or F_p |s_n| inside Algorithm 1)
   TangentMask free;   // tangential frame components not fixed by a Dirichlet condition
+  // Load paths (DESIGN section 12): the previous step's displacement in the frame (d values; only
+  // its free tangential components are read), or nullptr for the first step from u = 0. Friction
+  // then acts on the slip increment u_T - origin_T, and "stick" means no slip in this step.
+  const double* origin = nullptr;
 };
+
+// u_T - origin_T on the free tangential components (component 0 and fixed components: 0). Without
+// an origin this is u itself, so the single-step path computes exactly what it did before.
+template <int d>
+Vec<d> slip_increment(const ContactNode& p, const double* u) {
+  Vec<d> v = CVecMap<d>(u);
+  if (p.origin)
+    for (int a = 1; a < d; ++a)
+      if (p.free >> (a - 1) & 1u) v[a] -= p.origin[a];
+  return v;
+}
+
+// The nodal minimizer of a law with friction on the slip increment: 1/2 x^T B x - b^T x + s|x_T - z_T|
+// is, for y = x - z (z = (0, z_T)), the same problem in y with b - B z (z has no normal component, so
+// the constraint y_n <= g is unchanged and stick is y_T == 0, i.e. x_T == z_T exactly).
+template <int d, class Solve>
+Vec<d> solve_on_increment(const Mat<d>& B, const Vec<d>& b, const ContactNode& p, const Vec<d>& old, Solve&& solve) {
+  if (!p.origin) return solve(b, old);
+  Vec<d> z = Vec<d>::Zero();
+  for (int a = 1; a < d; ++a)
+    if (p.free >> (a - 1) & 1u) z[a] = p.origin[a];
+  Vec<d> x = solve(Vec<d>(b - B * z), Vec<d>(old - z));
+  return x + z;
+}
 
 enum class NodeState : std::int8_t { Free = 0, Stick = 1, Slip = 2 };
 
@@ -45,7 +73,8 @@ Mat<d> friction_hessian(double s, const double* u, TangentMask free) {
 template <class L, int d>
 double friction_energy(const ContactNode& p, const double* u, double r_n) {
   const bool active = u[0] >= p.gap;
-  return L::bound(p, active, r_n) * free_tangential_norm<d>(u, p.free);
+  const Vec<d> v = slip_increment<d>(p, u);
+  return L::bound(p, active, r_n) * free_tangential_norm<d>(v.data(), p.free);
 }
 
 // Stick and slip are decided by the free tangential components; a node in contact whose tangential
@@ -53,7 +82,8 @@ double friction_energy(const ContactNode& p, const double* u, double r_n) {
 template <int d>
 NodeState node_state(const ContactNode& p, const double* u) {
   if (!(u[0] >= p.gap)) return NodeState::Free;
-  return free_tangential_norm<d>(u, p.free) == 0 ? NodeState::Stick : NodeState::Slip;
+  const Vec<d> v = slip_increment<d>(p, u);
+  return free_tangential_norm<d>(v.data(), p.free) == 0 ? NodeState::Stick : NodeState::Slip;
 }
 
 // The smooth neighbourhood of the smoothed iterate at one node: truncation mask (active normal,
@@ -71,19 +101,21 @@ bool linearize_node(const ContactNode& p, const double* u, double* r, std::uint8
   else { hi[0] = p.gap - u[0]; bounded = true; }
   const double s = L::bound(p, active, r[0]);
   if (s <= 0) return bounded;
-  const double ut = free_tangential_norm<d>(u, p.free);
+  // sign bounds, gradient and Hessian of the friction term on the slip increment v_T = u_T - origin_T
+  const Vec<d> v = slip_increment<d>(p, u);
+  const double ut = free_tangential_norm<d>(v.data(), p.free);
   if (ut == 0) {
     for (int a = 1; a < d; ++a) mask[a] = 0;
     return bounded;
   }
   for (int a = 1; a < d; ++a) {
     if (!(p.free >> (a - 1) & 1u)) continue;
-    r[a] -= s * u[a] / ut;
-    if (u[a] > 0) { lo[a] = -u[a]; bounded = true; }
-    else if (u[a] < 0) { hi[a] = -u[a]; bounded = true; }
+    r[a] -= s * v[a] / ut;
+    if (v[a] > 0) { lo[a] = -v[a]; bounded = true; }
+    else if (v[a] < 0) { hi[a] = -v[a]; bounded = true; }
   }
   if constexpr (d == 3)
-    if (hessian) *hessian = friction_hessian<d>(s, u, p.free);
+    if (hessian) *hessian = friction_hessian<d>(s, v.data(), p.free);
   return bounded;
 }
 

@@ -10,7 +10,9 @@ struct Coulomb {
   static constexpr bool has_contact = true;
   template <int d>
   static Vec<d> solve(const Mat<d>& B, const Vec<d>& b, const ContactNode& p, const Vec<d>& old) {
-    return solve_node_coulomb<d>(B, b, p.gap, p.coef, old, p.free);
+    return solve_on_increment<d>(B, b, p, old, [&](const Vec<d>& bb, const Vec<d>& oo) {
+      return solve_node_coulomb<d>(B, bb, p.gap, p.coef, oo, p.free);
+    });
   }
   static double bound(const ContactNode& p, bool active, double r_n) { return active ? p.coef * std::max(0.0, r_n) : 0.0; }
 };

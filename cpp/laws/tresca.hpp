@@ -8,8 +8,10 @@ namespace cmg::law {
 struct Tresca {
   static constexpr bool has_contact = true;
   template <int d>
-  static Vec<d> solve(const Mat<d>& B, const Vec<d>& b, const ContactNode& p, const Vec<d>&) {
-    return solve_node_tresca<d>(B, b, p.gap, p.bound, p.free);
+  static Vec<d> solve(const Mat<d>& B, const Vec<d>& b, const ContactNode& p, const Vec<d>& old) {
+    return solve_on_increment<d>(B, b, p, old, [&](const Vec<d>& bb, const Vec<d>&) {
+      return solve_node_tresca<d>(B, bb, p.gap, p.bound, p.free);
+    });
   }
   static double bound(const ContactNode& p, bool, double) { return p.bound; }
 };

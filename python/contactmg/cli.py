@@ -67,6 +67,32 @@ def _with_suffix(kind: str, suffixes):
     return parse
 
 
+def _float(name):
+    def parse(s):
+        try:
+            v = float(s)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{name} must be a number, got {s!r}")
+        if not math.isfinite(v):
+            raise argparse.ArgumentTypeError(f"{name} must be a finite number, got {s}")
+        return v
+    return parse
+
+
+def add_path_arguments(p) -> None:
+    """The load path options (issue 12; cli_path.py runs them)."""
+    p.add_argument("--steps", type=_positive_int("--steps", 1, 100000), default=None,
+                   help="load path: the loading in N equal increments (incremental Coulomb law)")
+    p.add_argument("--shear", type=_float("--shear"), default=None,
+                   help="after the loading, move the top tangentially (x) by S (Cattaneo-Mindlin)")
+    p.add_argument("--shear-steps", type=_positive_int("--shear-steps", 1, 100000), default=None,
+                   help="increments of the shear phase (default 1)")
+    p.add_argument("--series", type=_with_suffix("--series", (".pvd",)), metavar="PATH",
+                   help="load path: a ParaView time series (.pvd collection of VTU files, one per step)")
+    p.add_argument("--zone-plot", type=_with_suffix("--zone-plot", PLOT_SUFFIXES), metavar="PATH",
+                   help="load path: the stick and slip zones against the load step")
+
+
 def _parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="contactmg", description="Multigrid for elastic contact with Coulomb friction")
     sub = p.add_subparsers(dest="command", required=True)
@@ -85,6 +111,7 @@ def _parser() -> argparse.ArgumentParser:
     h.add_argument("--json", type=_writable, metavar="PATH|-")
     h.add_argument("--vtu", type=_with_suffix("--vtu", (".vtu",)), metavar="PATH")
     h.add_argument("--plot", type=_with_suffix("--plot", PLOT_SUFFIXES), metavar="PATH")
+    add_path_arguments(h)
     h.add_argument("-q", "--quiet", action="store_true")
     t = sub.add_parser("table1", help="Table 1 and Figure 1 of the paper: both algorithms over levels and F")
     t.add_argument("--levels", type=_positive_int("--levels", 1, MAX_LEVELS), nargs="+", default=None)
@@ -153,12 +180,23 @@ def _emit_json(path: str, obj: dict) -> None:
 
 
 def run_hertz(args) -> int:
+    from . import cli_path
     from .hertz import hertz_problem
 
+    cli_path.check(args)
     problem = hertz_problem(args.cell, args.levels, args.friction, coulomb_at_zero=args.method == "fixed-point",
                             cycle=args.cycle, nu1=args.nu1, nu2=args.nu2, hierarchy=args.hierarchy)
-    result = problem.solve(args.method, tol=args.tol, max_cycles=args.max_cycles)
+    if cli_path.wanted(args):
+        from .generators import HERTZ_TOP
+        from .hertz import TOP_DISPLACEMENT
+
+        path = cli_path.solve(args, problem, [HERTZ_TOP], (0.0, TOP_DISPLACEMENT), (args.shear or 0.0, 0.0))
+        result = path.last
+    else:
+        result = problem.solve(args.method, tol=args.tol, max_cycles=args.max_cycles)
     report = hertz_report(args, problem, result)
+    if cli_path.wanted(args):
+        cli_path.report(args, path, report)
     if args.json:
         _emit_json(args.json, report)
     if args.vtu:
@@ -182,7 +220,9 @@ def run_hertz(args) -> int:
               + f", setup {result.setup_seconds:.2f} s, solve {result.solve_seconds:.2f} s, "
               f"contact {report['contact_nodes']} (stick {report['stick_nodes']}, slip {report['slip_nodes']}), "
               f"reaction {report['reaction'][1]:.6g}", file=stream)
-    return EXIT_OK if result.converged else EXIT_NO_CONVERGENCE
+    if cli_path.wanted(args) and not args.quiet:
+        cli_path.print_steps(report, sys.stderr if args.json == "-" else sys.stdout)
+    return EXIT_OK if (path.converged if cli_path.wanted(args) else result.converged) else EXIT_NO_CONVERGENCE
 
 
 def main(argv: Optional[List[str]] = None) -> int:

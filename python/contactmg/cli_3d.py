@@ -33,10 +33,19 @@ def add_parsers(sub) -> None:
     _common(s, sphere.DEFAULT_LEVELS)
     s.add_argument("--displacement", type=cli._nonneg_float("--displacement", positive=True), default=sphere.DISPLACEMENT)
     s.add_argument("--plot", type=cli._with_suffix("--plot", PLOT_SUFFIXES), metavar="PATH")
+    cli.add_path_arguments(s)
     c = sub.add_parser("cork", help="the cork pushed into a narrowing bottle neck (3D, Figure 2 right)")
     _common(c, cork.DEFAULT_LEVELS)
     c.add_argument("--push", type=cli._nonneg_float("--push"), default=cork.PUSH)
     c.add_argument("--picture", type=cli._with_suffix("--picture", PLOT_SUFFIXES), metavar="PATH")
+    # load path: push in (--steps), then pull the plunger back to where it started
+    c.add_argument("--steps", type=cli._positive_int("--steps", 1, 100000), default=None,
+                   help="load path: the push in N equal increments (incremental Coulomb law)")
+    c.add_argument("--pull-back", action="store_true", help="after the push, move the top back to its start")
+    c.add_argument("--pull-back-steps", dest="shear_steps", type=cli._positive_int("--pull-back-steps", 1, 100000),
+                   default=None, help="increments of the pull-back (default 1)")
+    c.add_argument("--series", type=cli._with_suffix("--series", (".pvd",)), metavar="PATH")
+    c.add_argument("--zone-plot", type=cli._with_suffix("--zone-plot", PLOT_SUFFIXES), metavar="PATH")
 
 
 def _report(args, problem, result, name) -> dict:
@@ -61,7 +70,7 @@ def _save(fig, path):
     plt.close(fig)
 
 
-def _finish(args, report, result, label) -> int:
+def _finish(args, report, result, label, path=None) -> int:
     if args.json:
         cli._emit_json(args.json, report)
     if args.vtu:
@@ -73,17 +82,33 @@ def _finish(args, report, result, label) -> int:
               + (f", {result.outer_iterations} outer iterations" if result.outer_iterations is not None else "")
               + f", setup {result.setup_seconds:.2f} s, solve {result.solve_seconds:.2f} s, "
               f"contact {report['contact_nodes']} (stick {report['stick_nodes']}, slip {report['slip_nodes']})", file=stream)
-    return cli.EXIT_OK if result.converged else cli.EXIT_NO_CONVERGENCE
+        if path is not None:
+            from . import cli_path
+            cli_path.print_steps(report, stream)
+    converged = path.converged if path is not None else result.converged
+    return cli.EXIT_OK if converged else cli.EXIT_NO_CONVERGENCE
 
 
 def run_sphere(args) -> int:
     from . import sphere
 
+    from . import cli_path
+    from .generators_3d import BALL_TOP
+
+    cli_path.check(args)
     problem = sphere.sphere_problem(args.cell, args.levels, args.friction, args.displacement,
                                     coulomb_at_zero=args.method == "fixed-point", cycle=args.cycle, nu1=args.nu1,
                                     nu2=args.nu2)
-    result = problem.solve(args.method, tol=args.tol, max_cycles=args.max_cycles)
+    path = None
+    if cli_path.wanted(args):
+        path = cli_path.solve(args, problem, [BALL_TOP], (0.0, 0.0, -args.displacement), (args.shear or 0.0, 0.0, 0.0),
+                              position=sphere.radial_distance, label="distance from the axis")
+        result = path.last
+    else:
+        result = problem.solve(args.method, tol=args.tol, max_cycles=args.max_cycles)
     report = _report(args, problem, result, "sphere")
+    if path is not None:
+        cli_path.report(args, path, report, zone=lambda r, states: sphere.radius_of(r, states), radii=True)
     load = float(result.reaction[2])
     report["displacement"] = args.displacement
     report["hertz_radius"] = sphere.hertz_radius(load) if load > 0 else None
@@ -102,7 +127,7 @@ def run_sphere(args) -> int:
         ax.set_title(f"Hertz sphere, {args.cell}, level {args.levels}, F = {args.friction}", fontsize=9)
         _save(fig, args.plot)
     label = f"sphere {args.cell}"
-    code = _finish(args, report, result, label)
+    code = _finish(args, report, result, label, path)
     if not args.quiet and report["hertz_radius"]:
         stream = sys.stderr if args.json == "-" else sys.stdout
         print(f"  load {load:.6g}, contact radius {report['contact_radius']:.4g} (Hertz {report['hertz_radius']:.4g}), "
@@ -114,10 +139,27 @@ def run_cork(args) -> int:
     from . import cork
 
     args.cell = "hexahedron"
+    from . import cli_path, sphere
+    from .generators_3d import CORK_TOP
+
+    args.shear = None  # the cork's second phase is the pull-back
+    if args.shear_steps is not None and not args.pull_back:
+        raise ValueError("--pull-back-steps needs --pull-back")
+    cli_path.check(args)
     problem = cork.cork_problem(args.levels, args.friction, args.push, coulomb_at_zero=args.method == "fixed-point",
                                 cycle=args.cycle, nu1=args.nu1, nu2=args.nu2)
-    result = problem.solve(args.method, tol=args.tol, max_cycles=args.max_cycles)
+    path = None
+    if cli_path.wanted(args):
+        path = cli_path.solve(args, problem, [CORK_TOP], (0.0, 0.0, -args.push), (0.0, 0.0, args.push),
+                              position=lambda r: r.mesh.points[r.contact_nodes, 2], label="z")
+        result = path.last
+    else:
+        result = problem.solve(args.method, tol=args.tol, max_cycles=args.max_cycles)
     report = _report(args, problem, result, "cork")
+    if path is not None:
+        cli_path.report(args, path, report, zone=lambda r, states: sphere.radius_of(r, states), radii=True)
+        for row, r in zip(report["steps"], path.steps):
+            row["push_force"] = cork.push_force(problem, r)
     report["push"] = args.push
     report["push_force"] = cork.push_force(problem, result)
     report["material"] = {"E": problem.material.E, "nu": problem.material.nu}
@@ -132,7 +174,7 @@ def run_cork(args) -> int:
         ax = fig.add_subplot(projection="3d")
         plot_cork(problem, result, ax=ax, neck=cork.neck())
         _save(fig, args.picture)
-    code = _finish(args, report, result, "cork")
+    code = _finish(args, report, result, "cork", path)
     if not args.quiet:
         stream = sys.stderr if args.json == "-" else sys.stdout
         print(f"  push force {report['push_force']:.6g} N for D = {args.push} mm", file=stream)

@@ -90,6 +90,44 @@ def _field(value: Optional[VectorField], x: np.ndarray, name: str) -> np.ndarray
     return np.ascontiguousarray(v)
 
 
+def assemble_load(mesh, body_force: Optional[VectorField] = None,
+                  traction: Optional[Dict[int, VectorField]] = None) -> np.ndarray:
+    """The nodal load (n, d): body force and Neumann tractions on tagged facets (a load path
+    assembles one per step)."""
+    load = _core.assemble_mass_load(mesh.points, mesh.cells, mesh.cell_type, _field(body_force, mesh.points, "body_force"))
+    for tag, value in (traction or {}).items():
+        (tag,) = tag_tuple(tag, "a traction tag")
+        sel = mesh.facet_tags == tag
+        if not np.any(sel):
+            raise ValueError(f"no boundary facet carries the traction tag {tag}")
+        load += _core.assemble_facet_load(mesh.points, mesh.facets[sel], _field(value, mesh.points, f"traction[{tag}]"))
+    return load
+
+
+def dirichlet_arrays(mesh, dirichlet: Sequence[Dirichlet]):
+    """(fixed (n, d) uint8, fixed_values (n, d)) of a sequence of Dirichlet conditions."""
+    d, n = mesh.dim, mesh.num_points
+    fixed = np.zeros((n, d), dtype=np.uint8)
+    values = np.zeros((n, d))
+    for bc in dirichlet:
+        nodes = mesh.boundary_nodes(bc.tags)
+        if len(nodes) == 0:
+            raise ValueError(f"no boundary facet carries the Dirichlet tags {list(bc.tags)}")
+        if callable(bc.value):
+            fixed[nodes] = 1
+            values[nodes] = _field(bc.value, mesh.points[nodes], "Dirichlet value")
+            continue
+        if len(bc.value) != d:
+            raise ValueError(f"a Dirichlet value needs {d} components (None for free), got {len(bc.value)}")
+        for a, v in enumerate(bc.value):
+            if v is not None:
+                if isinstance(v, (bool, np.bool_)) or not isinstance(v, numbers.Real) or not np.isfinite(v):
+                    raise ValueError(f"Dirichlet values must be finite numbers (None for free), got {v!r}")
+                fixed[nodes, a] = 1
+                values[nodes, a] = v
+    return fixed, values
+
+
 def _count(v, name: str, lo: int, hi: int) -> int:
     if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, np.integer)) or not lo <= v <= hi:
         raise ValueError(f"{name} must be an integer in {lo}..{hi}, got {v!r}")
@@ -152,35 +190,9 @@ class ContactProblem:
         self.hierarchy, self.material, self.friction = hierarchy, material, friction
         self.benchmark: Optional[str] = None  # "hertz" for the Hertz benchmark (its zones are centred on x = 0)
         mesh = self.mesh = hierarchy.finest
-        d, n = mesh.dim, mesh.num_points
         self.A = _core.assemble_elasticity(mesh.points, mesh.cells, mesh.cell_type, material.E, material.nu)
-        self.load = _core.assemble_mass_load(mesh.points, mesh.cells, mesh.cell_type,
-                                             _field(body_force, mesh.points, "body_force"))
-        for tag, value in (traction or {}).items():
-            (tag,) = tag_tuple(tag, "a traction tag")
-            sel = mesh.facet_tags == tag
-            if not np.any(sel):
-                raise ValueError(f"no boundary facet carries the traction tag {tag}")
-            self.load += _core.assemble_facet_load(mesh.points, mesh.facets[sel],
-                                                   _field(value, mesh.points, f"traction[{tag}]"))
-        self.fixed = np.zeros((n, d), dtype=np.uint8)
-        self.fixed_values = np.zeros((n, d))
-        for bc in dirichlet:
-            nodes = mesh.boundary_nodes(bc.tags)
-            if len(nodes) == 0:
-                raise ValueError(f"no boundary facet carries the Dirichlet tags {list(bc.tags)}")
-            if callable(bc.value):
-                self.fixed[nodes] = 1
-                self.fixed_values[nodes] = _field(bc.value, mesh.points[nodes], "Dirichlet value")
-                continue
-            if len(bc.value) != d:
-                raise ValueError(f"a Dirichlet value needs {d} components (None for free), got {len(bc.value)}")
-            for a, v in enumerate(bc.value):
-                if v is not None:
-                    if isinstance(v, (bool, np.bool_)) or not isinstance(v, numbers.Real) or not np.isfinite(v):
-                        raise ValueError(f"Dirichlet values must be finite numbers (None for free), got {v!r}")
-                    self.fixed[nodes, a] = 1
-                    self.fixed_values[nodes, a] = v
+        self.load = assemble_load(mesh, body_force, traction)
+        self.fixed, self.fixed_values = dirichlet_arrays(mesh, dirichlet)
         self._check_rigid_motion()
         self.contact = self._contact_boundary(contact_tags, obstacle)
         self.coefficients = friction.coefficients(self.contact.nodes, self.contact.measure)
@@ -285,14 +297,16 @@ class ContactProblem:
     def law(self) -> str:
         return "linear" if len(self.contact.nodes) == 0 else self.friction.law
 
-    def _new_core_solver(self, law: str, options: CycleOptions, frame_fixed=None, frame_values=None, load=None):
+    def _new_core_solver(self, law: str, options: CycleOptions, frame_fixed=None, frame_values=None, load=None,
+                         fixed_values=None):
         """A core solver of this problem's matrix and data (building one does not re-assemble).
         frame_fixed/frame_values (num_contact, d): components of the contact nodes fixed in their
         frames on top of the Dirichlet data (the known-state linear reference)."""
         d = self.mesh.dim
         cls = _core.ContactSolver2D if d == 2 else _core.ContactSolver3D
         c = self.contact
-        return cls(self.A, self.load if load is None else load, self.fixed, self.fixed_values, c.nodes, c.normals,
+        values = self.fixed_values if fixed_values is None else fixed_values  # a load path's step: its own values
+        return cls(self.A, self.load if load is None else load, self.fixed, values, c.nodes, c.normals,
                    c.gaps, self.coefficients, law, [t.as_tuple() for t in self.hierarchy.transfers], options.cycle,
                    options.nu1, options.nu2, frame_fixed=frame_fixed, frame_values=frame_values)
 
