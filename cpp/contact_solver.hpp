@@ -65,6 +65,9 @@ class ContactSolver {
 
   // Truncated nonsmooth Newton multigrid steps (steps/tnnmg_step.hpp) from u0, same stop rules.
   SolveResult solve_tnnmg(const double* u0, const SolveOptions& opt, const CycleOptions& cyc) {
+    // its line search measures the friction term on u_T, not on the slip increment of a load step
+    if (P_.has_slip_origin())
+      throw InputError("method tnnmg does not take a slip origin (load paths): use nmg or fixed-point");
     return with_law(law_, [&](auto L) {
       using Law = decltype(L);
       start(u0);

@@ -97,3 +97,17 @@ def test_cli_method_tnnmg():
 def test_core_refuses_two_methods_at_once(hertz_problems):
     with pytest.raises(ValueError, match="choose one"):
         hertz_problems["triangle", 0.4].solver.solve(None, fixed_point=True, tnnmg=True)
+
+
+def test_tnnmg_refuses_a_slip_origin():
+    """TNNMG's line search measures friction on u_T, not on a load step's slip increment: a core
+    solver that carries a slip origin must refuse it instead of answering for the wrong energy."""
+    from contactmg.hertz import hertz_problem
+
+    p = hertz_problem("triangle", 3, 0.4)
+    s = p._new_core_solver(p.law, p.default_cycle)
+    s.set_slip_origin(np.zeros((p.mesh.num_points, 2)))
+    with pytest.raises(ValueError, match="slip origin"):
+        s.solve(tnnmg=True)
+    s.set_slip_origin(None)
+    assert s.solve(tnnmg=True)["converged"]
