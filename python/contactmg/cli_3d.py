@@ -20,6 +20,7 @@ def _common(p, levels_default):
     p.add_argument("--cycle", choices=["V", "W", "F"], default="F")
     p.add_argument("--nu1", type=cli._positive_int("--nu1", 0, 100), default=3)
     p.add_argument("--nu2", type=cli._positive_int("--nu2", 0, 100), default=3)
+    cli.add_thread_options(p)
     p.add_argument("--json", type=cli._writable, metavar="PATH|-")
     p.add_argument("--vtu", type=cli._with_suffix("--vtu", (".vtu",)), metavar="PATH")
     p.add_argument("-q", "--quiet", action="store_true")
@@ -82,7 +83,8 @@ def run_sphere(args) -> int:
     problem = sphere.sphere_problem(args.cell, args.levels, args.friction, args.displacement,
                                     coulomb_at_zero=args.method == "fixed-point", cycle=args.cycle, nu1=args.nu1,
                                     nu2=args.nu2)
-    result = problem.solve(args.method, tol=args.tol, max_cycles=args.max_cycles)
+    result = problem.solve(args.method, tol=args.tol, max_cycles=args.max_cycles, threads=args.threads,
+                           ordering=args.ordering)
     report = _report(args, problem, result, "sphere")
     load = float(result.reaction[2])
     report["displacement"] = args.displacement
@@ -116,7 +118,8 @@ def run_cork(args) -> int:
     args.cell = "hexahedron"
     problem = cork.cork_problem(args.levels, args.friction, args.push, coulomb_at_zero=args.method == "fixed-point",
                                 cycle=args.cycle, nu1=args.nu1, nu2=args.nu2)
-    result = problem.solve(args.method, tol=args.tol, max_cycles=args.max_cycles)
+    result = problem.solve(args.method, tol=args.tol, max_cycles=args.max_cycles, threads=args.threads,
+                           ordering=args.ordering)
     report = _report(args, problem, result, "cork")
     report["push"] = args.push
     report["push_force"] = cork.push_force(problem, result)

@@ -26,6 +26,9 @@ INT32_MAX = 2 ** 31 - 1  # the core counts cycles in a C int
 # The redesigned core (issue 9) takes cycle, nu1, nu2 and a progress callback per solve; an older
 # core takes the cycle at construction only, and then one core solver is kept per cycle choice.
 SOLVE_TAKES_CYCLE_OPTIONS = "progress" in (_core.ContactSolver2D.solve.__doc__ or "")
+# Issue 15: threads= and ordering= per solve (coloured Gauss-Seidel sweeps).
+SOLVE_TAKES_THREADS = "threads" in (_core.ContactSolver2D.solve.__doc__ or "")
+ORDERINGS = ("coloured", "lexicographic")
 
 
 def tag_tuple(tags, name: str) -> tuple:
@@ -327,7 +330,8 @@ class ContactProblem:
               fixed_point_tol: float = 1e-9, fixed_point_max: int = 100,
               error_reference: Optional[np.ndarray] = None, cycle: Optional[str] = None,
               nu1: Optional[int] = None, nu2: Optional[int] = None,
-              progress: Optional[Callable[[dict], None]] = None) -> ContactResult:
+              progress: Optional[Callable[[dict], None]] = None, threads: int = 0,
+              ordering: Optional[str] = None) -> ContactResult:
         """Solve with `method`: "nmg" (Algorithm 2 for Coulomb; truncated monotone multigrid for
         frictionless and Tresca; linear multigrid without contact), "fixed-point" (Algorithm 1,
         Coulomb only) or "linear" (the cost reference: the linear problem with the contact state of
@@ -339,7 +343,11 @@ class ContactProblem:
         `progress(record)` is called after every cycle with a dict (cycle, outer,
         correction_norm, energy, seconds, error, active, stick, slip, rebuilt) by a core that
         reports cycles (SOLVE_TAKES_CYCLE_OPTIONS); an exception it raises stops the solve. With an
-        older core, which runs all cycles in one call, asking for it is an error."""
+        older core, which runs all cycles in one call, asking for it is an error. `threads`: the
+        threads of the sweeps, products and norms (0: all cores); the result is the same bit for
+        bit on any count. `ordering` of every Gauss-Seidel sweep: "coloured" (the default: colours
+        of the block graph, the rows of one colour at once) or "lexicographic" (one thread for the
+        sweeps)."""
         if method not in METHODS:
             raise ValueError(f"method must be one of {METHODS}, got {method!r}")
         options = self._options(cycle, nu1, nu2)
@@ -353,8 +361,14 @@ class ContactProblem:
                 raise ValueError(f"{name} must be an integer in 1..{INT32_MAX}, got {v!r}")
         if progress is not None and not callable(progress):
             raise ValueError(f"progress must be a callable (called with a dict after every cycle), got {progress!r}")
+        if isinstance(threads, (bool, np.bool_)) or not isinstance(threads, (int, np.integer)) or not 0 <= threads <= 4096:
+            raise ValueError(f"threads must be an integer in 0..4096 (0: all cores), got {threads!r}")
+        if ordering is not None and ordering not in ORDERINGS:
+            raise ValueError(f"ordering must be one of {ORDERINGS}, got {ordering!r}")
         kw = dict(tol=float(tol), rtol=float(rtol), max_cycles=int(max_cycles), fixed_point_tol=float(fixed_point_tol),
                   fixed_point_max=int(fixed_point_max), reference=error_reference)
+        if SOLVE_TAKES_THREADS:
+            kw.update(threads=int(threads), ordering=ordering)
         if SOLVE_TAKES_CYCLE_OPTIONS:
             kw.update(cycle=options.cycle, nu1=options.nu1, nu2=options.nu2, progress=progress)
         elif progress is not None:
@@ -370,7 +384,7 @@ class ContactProblem:
             return self._result(solver.solve(u0, **kw), method, options)
         if reference is None:
             reference = self.solve("nmg", tol=tol, rtol=rtol, max_cycles=max_cycles, cycle=options.cycle,
-                                   nu1=options.nu1, nu2=options.nu2)
+                                   nu1=options.nu1, nu2=options.nu2, threads=threads, ordering=ordering)
         t0 = time.perf_counter()
         solver = self._known_state_solver(reference, options)
         build = time.perf_counter() - t0
@@ -387,6 +401,8 @@ class ContactProblem:
         res = ContactResult.from_raw(self, raw, method)
         res.setup_seconds = self.assembly_seconds + self._build_seconds.get(self._solver_key(options), 0.0)
         res.extra["cycle_options"] = {"cycle": options.cycle, "nu1": options.nu1, "nu2": options.nu2}
+        if "threads" in raw:
+            res.extra["threads"], res.extra["ordering"] = int(raw["threads"]), str(raw["ordering"])
         return res
 
     def _known_state_solver(self, ref: ContactResult, options: CycleOptions):
