@@ -4,6 +4,7 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
+#include <utility>
 #include "contact_solver.hpp"
 #include "fem/assembly.hpp"
 #include "fem/bisection.hpp"
@@ -153,9 +154,10 @@ void bind_dim(py::module_& m) {
 
   using CS = ContactSolver<d>;
   py::class_<CS>(m, ("ContactSolver" + sfx).c_str(), "Multigrid for linear elasticity with contact and friction")
-      .def(py::init([](const BM& A, DArr f, BArr fixed, DArr fixed_values, IArr contact_nodes, DArr normals, DArr gaps,
+      .def(py::init([](BM& A, DArr f, BArr fixed, DArr fixed_values, IArr contact_nodes, DArr normals, DArr gaps,
                        DArr coefficients, const std::string& law, py::list transfers, const std::string& cycle, int nu1,
-                       int nu2, py::object frame_fixed, py::object frame_values, const std::string& ordering) {
+                       int nu2, py::object frame_fixed, py::object frame_values, const std::string& ordering,
+                       bool take_matrix) {
              const py::ssize_t n = A.rows, nc = contact_nodes.size();
              require_shape(f, "load", {n, d});
              require_shape(fixed, "fixed", {n, d});
@@ -196,14 +198,16 @@ void bind_dim(py::module_& m) {
              co.nu2 = nu2;
              co.ordering = parse_ordering(ordering);
              std::vector<Index> cn(contact_nodes.data(), contact_nodes.data() + nc);
-             return new CS(A, f.data(), fixed.data(), fixed_values.data(), cn, normals.data(), gaps.data(), coefficients.data(),
+             // take_matrix: the caller gives its matrix up (left empty), so the fine matrix is held once
+             BM fine = take_matrix ? std::exchange(A, BM()) : BM(A);
+             return new CS(std::move(fine), f.data(), fixed.data(), fixed_values.data(), cn, normals.data(), gaps.data(), coefficients.data(),
                            parse_law(law), T, co, frame_fixed.is_none() ? nullptr : ff.data(),
                            frame_fixed.is_none() ? nullptr : fv.data());
            }),
            py::arg("A"), py::arg("load"), py::arg("fixed"), py::arg("fixed_values"), py::arg("contact_nodes"),
            py::arg("normals"), py::arg("gaps"), py::arg("coefficients"), py::arg("law"), py::arg("transfers"),
            py::arg("cycle") = "V", py::arg("nu1") = 3, py::arg("nu2") = 3, py::arg("frame_fixed") = py::none(),
-           py::arg("frame_values") = py::none(), py::arg("ordering") = "coloured",
+           py::arg("frame_values") = py::none(), py::arg("ordering") = "lexicographic", py::arg("take_matrix") = false,
            "fixed/fixed_values: Dirichlet components in canonical axes (a contact node keeps its contact condition "
            "in its free directions); frame_fixed/frame_values (nc, d): components fixed in the contact frames")
       .def("solve", [](CS& S, py::object u0, double tol, double rtol, int max_cycles, bool fixed_point, double fp_tol,

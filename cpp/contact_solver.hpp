@@ -17,12 +17,12 @@ class ContactSolver {
     std::vector<double> weight;
   };
 
-  ContactSolver(const BlockMatrix<d>& A, const double* f, const std::uint8_t* fixed, const double* fixed_values,
+  ContactSolver(BlockMatrix<d> A, const double* f, const std::uint8_t* fixed, const double* fixed_values,
                 const std::vector<Index>& contact_nodes, const double* normals, const double* gaps, const double* coefficients,
                 Law law, const std::vector<Transfer>& transfers, CycleOptions cyc, const std::uint8_t* frame_fixed = nullptr,
                 const double* frame_values = nullptr)
       : law_(law),
-        P_(A, f, fixed, fixed_values, contact_nodes, normals, gaps, coefficients, frame_fixed, frame_values),
+        P_(std::move(A), f, fixed, fixed_values, contact_nodes, normals, gaps, coefficients, frame_fixed, frame_values),
         H_(prolongations(transfers)),
         C_(H_),
         cyc_(cyc) {

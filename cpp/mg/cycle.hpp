@@ -22,7 +22,10 @@ struct CycleOptions {
   int coarsest_max_sweeps = 50;
   // Gauss-Seidel order of every sweep (fine nonlinear, coarse projected): lexicographic, or by
   // colours of the block graph (rows of a colour on all threads).
-  Ordering ordering = Ordering::Coloured;
+  // Lexicographic by default: on the shared 2-core machine of issue 15 the coloured sweep was
+  // slower on one thread (neighbours of one colour are scattered: worse cache use) and the second
+  // thread gained nothing under load (docs/scaling.md, benchmarks/parallel_bandwidth.py).
+  Ordering ordering = Ordering::Lexicographic;
 };
 
 inline CycleType parse_cycle(const std::string& s) {

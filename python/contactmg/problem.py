@@ -29,6 +29,7 @@ SOLVE_TAKES_CYCLE_OPTIONS = "progress" in (_core.ContactSolver2D.solve.__doc__ o
 # Issue 15: threads= and ordering= per solve (coloured Gauss-Seidel sweeps).
 SOLVE_TAKES_THREADS = "threads" in (_core.ContactSolver2D.solve.__doc__ or "")
 ORDERINGS = ("coloured", "lexicographic")
+CORE_TAKES_MATRIX = "take_matrix" in (_core.ContactSolver2D.__init__.__doc__ or "")
 
 
 def tag_tuple(tags, name: str) -> tuple:
@@ -156,7 +157,7 @@ class ContactProblem:
         self.benchmark: Optional[str] = None  # "hertz" for the Hertz benchmark (its zones are centred on x = 0)
         mesh = self.mesh = hierarchy.finest
         d, n = mesh.dim, mesh.num_points
-        self.A = _core.assemble_elasticity(mesh.points, mesh.cells, mesh.cell_type, material.E, material.nu)
+        self._A = _core.assemble_elasticity(mesh.points, mesh.cells, mesh.cell_type, material.E, material.nu)
         self.load = _core.assemble_mass_load(mesh.points, mesh.cells, mesh.cell_type,
                                              _field(body_force, mesh.points, "body_force"))
         for tag, value in (traction or {}).items():
@@ -190,6 +191,16 @@ class ContactProblem:
         self._solvers: Dict[CycleOptions, object] = {}
         self._build_seconds: Dict[CycleOptions, float] = {}
         self.assembly_seconds = time.perf_counter() - t0 + hierarchy.build_seconds
+
+    @property
+    def A(self):
+        """The stiffness matrix (canonical axes, no boundary conditions). A core solver takes it
+        over when it is built (the fine matrix is then held once, issue 15); asking for it again
+        assembles it anew."""
+        if self._A is None:
+            m = self.mesh
+            self._A = _core.assemble_elasticity(m.points, m.cells, m.cell_type, self.material.E, self.material.nu)
+        return self._A
 
     # -- compatibility: the defaults of solve() ---------------------------------------------------
     @property
@@ -295,9 +306,14 @@ class ContactProblem:
         d = self.mesh.dim
         cls = _core.ContactSolver2D if d == 2 else _core.ContactSolver3D
         c = self.contact
-        return cls(self.A, self.load if load is None else load, self.fixed, self.fixed_values, c.nodes, c.normals,
-                   c.gaps, self.coefficients, law, [t.as_tuple() for t in self.hierarchy.transfers], options.cycle,
-                   options.nu1, options.nu2, frame_fixed=frame_fixed, frame_values=frame_values)
+        args = (self.load if load is None else load, self.fixed, self.fixed_values, c.nodes, c.normals,
+                c.gaps, self.coefficients, law, [t.as_tuple() for t in self.hierarchy.transfers], options.cycle,
+                options.nu1, options.nu2)
+        if not CORE_TAKES_MATRIX:
+            return cls(self.A, *args, frame_fixed=frame_fixed, frame_values=frame_values)
+        # The core takes the assembled matrix over (left empty here): one fine matrix in memory.
+        A, self._A = self.A, None
+        return cls(A, *args, frame_fixed=frame_fixed, frame_values=frame_values, take_matrix=True)
 
     def core_solver(self, cycle: Optional[str] = None, nu1: Optional[int] = None, nu2: Optional[int] = None):
         """The core solver for the cycle options (defaults: the problem's), built on first use and
