@@ -39,7 +39,7 @@ class ContactSolver {
   const CycleOptions& cycle_options() const { return cyc_; }
   Monitor& monitor() { return mon_; }
   std::size_t memory_bytes() const {
-    return P_.memory_bytes() + H_.memory_bytes() + C_.memory_bytes() + sizeof(double) * 9 * P_.num_nodes() * d +
+    return P_.memory_bytes() + H_.memory_bytes() + C_.memory_bytes() + sizeof(double) * 8 * P_.num_nodes() * d +
            sizeof(Index) * fine_coloured_.rows().size();
   }
   Index num_fine_colours() { return fine_order(Ordering::Coloured).num_colours(); }

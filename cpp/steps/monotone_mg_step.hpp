@@ -37,7 +37,7 @@ class MonotoneMultigridStep {
       : P_(P), H_(H), C_(C), built_(built), it_(it), opt_(opt), order_(fine_order) {
     const Index n = P.num_nodes() * d;
     mask_ = P.base_mask();
-    r_.assign(n, 0.0); w_.assign(n, 0.0); old_.assign(n, 0.0); tmp_.assign(n, 0.0);
+    r_.assign(n, 0.0); w_.assign(n, 0.0); old_.assign(n, 0.0);
     lo_.assign(n, -kInf); hi_.assign(n, kInf);
   }
 
@@ -142,7 +142,10 @@ class MonotoneMultigridStep {
   CycleOptions opt_;
   const SweepOrder& order_;  // of the fine nonlinear sweeps
   std::vector<std::uint8_t> mask_;
-  std::vector<double> r_, w_, old_, tmp_, lo_, hi_;
+  // tmp_ shares w_'s storage: the coarse correction w is added to u before A (u - u_old) needs
+  // the buffer (one fine vector less, issue 15)
+  std::vector<double> r_, w_, old_, lo_, hi_;
+  std::vector<double>& tmp_ = w_;
   std::vector<std::pair<Index, Mat<d>>> hessian_;
 };
 
