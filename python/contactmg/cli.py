@@ -70,7 +70,7 @@ def _with_suffix(kind: str, suffixes):
 def add_thread_options(p) -> None:
     p.add_argument("--threads", type=_positive_int("--threads", 0, 4096), default=0,
                    help="threads of the sweeps and products (default 0: all cores; the result does not depend on it)")
-    p.add_argument("--ordering", choices=["coloured", "lexicographic"], default="coloured",
+    p.add_argument("--ordering", choices=["lexicographic", "coloured"], default="lexicographic",
                    help="Gauss-Seidel order: colours of the block graph (parallel) or lexicographic")
 
 

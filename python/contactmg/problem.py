@@ -299,17 +299,20 @@ class ContactProblem:
     def law(self) -> str:
         return "linear" if len(self.contact.nodes) == 0 else self.friction.law
 
-    def _new_core_solver(self, law: str, options: CycleOptions, frame_fixed=None, frame_values=None, load=None):
+    def _new_core_solver(self, law: str, options: CycleOptions, frame_fixed=None, frame_values=None, load=None,
+                         take_matrix: bool = False):
         """A core solver of this problem's matrix and data (building one does not re-assemble).
         frame_fixed/frame_values (num_contact, d): components of the contact nodes fixed in their
-        frames on top of the Dirichlet data (the known-state linear reference)."""
+        frames on top of the Dirichlet data (the known-state linear reference). take_matrix: the
+        core takes the assembled matrix over (one fine matrix in memory; `A` is assembled again
+        when asked for) -- for the solver kept for the problem's life, not for passing ones."""
         d = self.mesh.dim
         cls = _core.ContactSolver2D if d == 2 else _core.ContactSolver3D
         c = self.contact
         args = (self.load if load is None else load, self.fixed, self.fixed_values, c.nodes, c.normals,
                 c.gaps, self.coefficients, law, [t.as_tuple() for t in self.hierarchy.transfers], options.cycle,
                 options.nu1, options.nu2)
-        if not CORE_TAKES_MATRIX:
+        if not (CORE_TAKES_MATRIX and take_matrix):
             return cls(self.A, *args, frame_fixed=frame_fixed, frame_values=frame_values)
         # The core takes the assembled matrix over (left empty here): one fine matrix in memory.
         A, self._A = self.A, None
@@ -322,7 +325,7 @@ class ContactProblem:
         key = self._solver_key(options)
         if key not in self._solvers:
             t0 = time.perf_counter()
-            self._solvers[key] = self._new_core_solver(self.law, key)
+            self._solvers[key] = self._new_core_solver(self.law, key, take_matrix=True)
             self._build_seconds[key] = time.perf_counter() - t0
         return self._solvers[key]
 
