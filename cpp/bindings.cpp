@@ -4,6 +4,7 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
+#include <utility>
 #include "contact_solver.hpp"
 #include "fem/assembly.hpp"
 #include "fem/bisection.hpp"
@@ -185,9 +186,10 @@ void bind_dim(py::module_& m) {
 
   using CS = ContactSolver<d>;
   py::class_<CS>(m, ("ContactSolver" + sfx).c_str(), "Multigrid for linear elasticity with contact and friction")
-      .def(py::init([](const BM& A, DArr f, BArr fixed, DArr fixed_values, IArr contact_nodes, DArr normals, DArr gaps,
+      .def(py::init([](BM& A, DArr f, BArr fixed, DArr fixed_values, IArr contact_nodes, DArr normals, DArr gaps,
                        DArr coefficients, const std::string& law, py::list transfers, const std::string& cycle, int nu1,
-                       int nu2, py::object frame_fixed, py::object frame_values) {
+                       int nu2, py::object frame_fixed, py::object frame_values, const std::string& ordering,
+                       bool take_matrix) {
              const py::ssize_t n = A.rows, nc = contact_nodes.size();
              require_shape(f, "load", {n, d});
              require_shape(fixed, "fixed", {n, d});
@@ -226,20 +228,23 @@ void bind_dim(py::module_& m) {
              co.cycle = parse_cycle(cycle);
              co.nu1 = nu1;
              co.nu2 = nu2;
+             co.ordering = parse_ordering(ordering);
              std::vector<Index> cn(contact_nodes.data(), contact_nodes.data() + nc);
-             return new CS(A, f.data(), fixed.data(), fixed_values.data(), cn, normals.data(), gaps.data(), coefficients.data(),
+             // take_matrix: the caller gives its matrix up (left empty), so the fine matrix is held once
+             BM fine = take_matrix ? std::exchange(A, BM()) : BM(A);
+             return new CS(std::move(fine), f.data(), fixed.data(), fixed_values.data(), cn, normals.data(), gaps.data(), coefficients.data(),
                            parse_law(law), T, co, frame_fixed.is_none() ? nullptr : ff.data(),
                            frame_fixed.is_none() ? nullptr : fv.data());
            }),
            py::arg("A"), py::arg("load"), py::arg("fixed"), py::arg("fixed_values"), py::arg("contact_nodes"),
            py::arg("normals"), py::arg("gaps"), py::arg("coefficients"), py::arg("law"), py::arg("transfers"),
            py::arg("cycle") = "V", py::arg("nu1") = 3, py::arg("nu2") = 3, py::arg("frame_fixed") = py::none(),
-           py::arg("frame_values") = py::none(),
+           py::arg("frame_values") = py::none(), py::arg("ordering") = "lexicographic", py::arg("take_matrix") = false,
            "fixed/fixed_values: Dirichlet components in canonical axes (a contact node keeps its contact condition "
            "in its free directions); frame_fixed/frame_values (nc, d): components fixed in the contact frames")
       .def("solve", [](CS& S, py::object u0, double tol, double rtol, int max_cycles, bool fixed_point, double fp_tol,
                        int fp_max, py::object reference, py::object cycle, py::object nu1, py::object nu2, py::object progress,
-                       bool tnnmg) {
+                       bool tnnmg, py::object ordering, int threads) {
              SolveOptions o;
              o.tol = tol; o.rtol = rtol; o.max_cycles = max_cycles; o.fixed_point_tol = fp_tol; o.fixed_point_max = fp_max;
              if (!(tol >= 0) || !(rtol >= 0) || !(tol > 0 || rtol > 0)) throw InputError("tolerances must be >= 0, one of them > 0");
@@ -248,7 +253,9 @@ void bind_dim(py::module_& m) {
              if (!cycle.is_none()) co.cycle = parse_cycle(cycle.cast<std::string>());
              if (!nu1.is_none()) co.nu1 = nu1.cast<int>();
              if (!nu2.is_none()) co.nu2 = nu2.cast<int>();
+             if (!ordering.is_none()) co.ordering = parse_ordering(ordering.cast<std::string>());
              check_smoothing_steps(co.nu1, co.nu2);
+             if (threads < 0) throw InputError("threads must be >= 0 (0: all cores)");
              if (!progress.is_none() && !PyCallable_Check(progress.ptr())) throw InputError("progress must be callable or None");
              if (tnnmg && fixed_point) throw InputError("tnnmg and fixed_point are two methods: choose one");
              DArr u;
@@ -277,6 +284,7 @@ void bind_dim(py::module_& m) {
              bool interrupted = false;
              {
                py::gil_scoped_release release;
+               ThreadScope team(threads);
                try { R = fixed_point ? S.solve_fixed_point(up, o, co) : tnnmg ? S.solve_tnnmg(up, o, co) : S.solve(up, o, co); }
                catch (const Interrupted&) { interrupted = true; }
              }
@@ -285,25 +293,31 @@ void bind_dim(py::module_& m) {
              if (interrupted) throw py::error_already_set();
              py::dict out = result_to_dict<d>(R, S);
              out["cycle_type"] = std::string(cycle_name(co.cycle)) + "(" + std::to_string(co.nu1) + "," + std::to_string(co.nu2) + ")";
+             out["ordering"] = ordering_name(co.ordering);
+             out["threads"] = threads == 0 ? max_threads() : (have_openmp() ? threads : 1);
              return out;
            },
            py::arg("u0") = py::none(), py::arg("tol") = 1e-11, py::arg("rtol") = 0.0, py::arg("max_cycles") = 200,
            py::arg("fixed_point") = false, py::arg("fixed_point_tol") = 1e-9, py::arg("fixed_point_max") = 100,
            py::arg("reference") = py::none(), py::arg("cycle") = py::none(), py::arg("nu1") = py::none(),
            py::arg("nu2") = py::none(), py::arg("progress") = py::none(), py::arg("tnnmg") = false,
+           py::arg("ordering") = py::none(), py::arg("threads") = 0,
            "tnnmg: truncated nonsmooth Newton multigrid steps instead of monotone multigrid cycles; "
-           "cycle, nu1, nu2 override the constructor's for this solve; progress(record: dict) is called after every "
+           "cycle, nu1, nu2, ordering override the constructor's for this solve; threads: 0 = all cores (the result "
+           "does not depend on it); progress(record: dict) is called after every "
            "cycle (cycle, outer, correction_norm, energy, seconds, error, active, stick, slip, rebuilt)")
-      .def("smooth", [](CS& S, DArr u0, int sweeps) {
+      .def("smooth", [](CS& S, DArr u0, int sweeps, const std::string& ordering, int threads) {
              require_shape(u0, "u0", {(py::ssize_t)S.num_nodes(), d});
              if (sweeps < 0) throw InputError("sweeps must be >= 0");
              std::vector<double> u;
              {
+               const Ordering o = parse_ordering(ordering);
                py::gil_scoped_release release;
-               u = S.smooth(u0.data(), sweeps);
+               ThreadScope team(threads);
+               u = S.smooth(u0.data(), sweeps, o);
              }
              return to_numpy(u, {(py::ssize_t)S.num_nodes(), d});
-           }, py::arg("u0"), py::arg("sweeps") = 1,
+           }, py::arg("u0"), py::arg("sweeps") = 1, py::arg("ordering") = "lexicographic", py::arg("threads") = 0,
            "Nonlinear Gauss-Seidel sweeps (alternating, forward first) from u0; a solution is a fixed point")
       .def_property_readonly("num_levels", [](const CS& S) { return S.hierarchy().num_coarse_levels() + 1; })
       .def_property_readonly("frames", [](const CS& S) { return frames_array<d>(S); },
@@ -329,6 +343,7 @@ void bind_dim(py::module_& m) {
       .def_property_readonly("has_slip_origin", &CS::has_slip_origin)
       .def("fine_matrix", [](const CS& S) { return std::make_shared<BM>(S.fine_matrix()); })
       .def("memory_bytes", &CS::memory_bytes)
+      .def_property_readonly("num_colours", &CS::num_fine_colours, "colours of the fine block graph (coloured sweeps)")
       .def("rebuild_coarse", &CS::rebuild_coarse, "Full Galerkin rebuild of the coarse matrices for the current truncation");
 
   m.def(("solve_node_tresca_" + sfx).c_str(), [](DArr B, DArr b, double g, double s, int free) {
@@ -402,6 +417,8 @@ PYBIND11_MODULE(_core, m) {
   bind_dim<2>(m);
   bind_dim<3>(m);
 
+  m.def("openmp", [] { return have_openmp(); }, "whether the core was built with OpenMP threads");
+  m.def("max_threads", [] { return max_threads(); }, "the cores the threads of a solve may use (threads=0)");
   m.def("cell_table", [] {
     py::dict out;
     for (const CellInfo& c : cell_table()) {

@@ -1,7 +1,7 @@
 // Block sparse rows with fixed d x d blocks: the one matrix type of the core.
 #pragma once
 #include <algorithm>
-#include "common.hpp"
+#include "parallel.hpp"
 
 namespace cmg {
 
@@ -42,14 +42,14 @@ struct BlockMatrix {
     return (it != e && *it == j) ? Index(it - indices.begin()) : -1;
   }
 
-  // y = A x
+  // y = A x (rows on all threads: each writes its own entries)
   void multiply(const double* x, double* y) const {
-    for (Index i = 0; i < rows; ++i) {
+    parallel_for(rows, [&](Index i) {
       Vec<d> s = Vec<d>::Zero();
       for (Index k = indptr[i]; k < indptr[i + 1]; ++k)
         s.noalias() += block(k) * CVecMap<d>(x + d * indices[k]);
       VecMap<d>(y + d * i) = s;
-    }
+    });
   }
 
   std::size_t memory_bytes() const {

@@ -15,11 +15,12 @@ class ContactProblem {
  public:
   // fixed, fixed_values: canonical components (n * d). frame_fixed, frame_values (nc * d, may be
   // null): further components fixed in the contact frames (the known-state linear reference).
-  ContactProblem(const BlockMatrix<d>& A, const double* f, const std::uint8_t* fixed, const double* fixed_values,
+  // A is taken by value: a caller that no longer needs its matrix moves it in (no second copy).
+  ContactProblem(BlockMatrix<d> A, const double* f, const std::uint8_t* fixed, const double* fixed_values,
                  const std::vector<Index>& contact_nodes, const double* normals, const double* gaps, const double* coefficients,
                  const std::uint8_t* frame_fixed = nullptr, const double* frame_values = nullptr)
-      : A_(A) {
-    const Index n = A.rows;
+      : A_(std::move(A)) {
+    const Index n = A_.rows;
     const Index nc = (Index)contact_nodes.size();
     for (Index k = 0; k < n * d; ++k)
       if (fixed[k] && !std::isfinite(fixed_values[k])) throw InputError("a Dirichlet value is not finite");

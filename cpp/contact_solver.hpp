@@ -18,12 +18,12 @@ class ContactSolver {
     std::vector<double> weight;
   };
 
-  ContactSolver(const BlockMatrix<d>& A, const double* f, const std::uint8_t* fixed, const double* fixed_values,
+  ContactSolver(BlockMatrix<d> A, const double* f, const std::uint8_t* fixed, const double* fixed_values,
                 const std::vector<Index>& contact_nodes, const double* normals, const double* gaps, const double* coefficients,
                 Law law, const std::vector<Transfer>& transfers, CycleOptions cyc, const std::uint8_t* frame_fixed = nullptr,
                 const double* frame_values = nullptr)
       : law_(law),
-        P_(A, f, fixed, fixed_values, contact_nodes, normals, gaps, coefficients, frame_fixed, frame_values),
+        P_(std::move(A), f, fixed, fixed_values, contact_nodes, normals, gaps, coefficients, frame_fixed, frame_values),
         H_(prolongations(transfers)),
         C_(H_),
         cyc_(cyc) {
@@ -40,11 +40,13 @@ class ContactSolver {
   const CycleOptions& cycle_options() const { return cyc_; }
   Monitor& monitor() { return mon_; }
   std::size_t memory_bytes() const {
-    return P_.memory_bytes() + H_.memory_bytes() + C_.memory_bytes() + sizeof(double) * 9 * P_.num_nodes() * d;
+    return P_.memory_bytes() + H_.memory_bytes() + C_.memory_bytes() + sizeof(double) * 8 * P_.num_nodes() * d +
+           sizeof(Index) * fine_coloured_.rows().size();
   }
   // Load paths: friction on the slip increment from the canonical displacement u_prev (nullptr: none).
   void set_slip_origin(const double* u_prev) { P_.set_slip_origin(u_prev); }
   bool has_slip_origin() const { return P_.has_slip_origin(); }
+  Index num_fine_colours() { return fine_order(Ordering::Coloured).num_colours(); }
   // Full Galerkin rebuild for the current linearization (diagnostics: compare with the incremental one).
   void rebuild_coarse() { H_.rebuild(P_.matrix(), built_.mask.data(), built_.hessian); }
 
@@ -55,7 +57,7 @@ class ContactSolver {
       start(u0);
       P_.set_bounds_to_coefficients();
       SolveResult R;
-      MonotoneMultigridStep<d, Law> step(P_, H_, C_, built_, it_, cyc);
+      MonotoneMultigridStep<d, Law> step(P_, H_, C_, built_, it_, cyc, fine_order(cyc.ordering));
       run_loop(step, opt, mon_, R, 0);
       finish<Law>(R);
       return R;
@@ -73,7 +75,7 @@ class ContactSolver {
       start(u0);
       P_.set_bounds_to_coefficients();
       SolveResult R;
-      TnnmgStep<d, Law> step(P_, H_, C_, built_, it_, cyc);
+      TnnmgStep<d, Law> step(P_, H_, C_, built_, it_, cyc, fine_order(cyc.ordering));
       run_loop(step, opt, mon_, R, 0);
       finish<Law>(R);
       return R;
@@ -85,7 +87,7 @@ class ContactSolver {
     if (law_ != Law::Coulomb) throw InputError("the fixed-point iteration needs a Coulomb friction law");
     start(u0);
     SolveResult R;
-    MonotoneMultigridStep<d, law::Tresca> tresca(P_, H_, C_, built_, it_, cyc);
+    MonotoneMultigridStep<d, law::Tresca> tresca(P_, H_, C_, built_, it_, cyc, fine_order(cyc.ordering));
     FixedPointStep<d> step(P_, tresca, it_);
     run_fixed_point(step, opt, mon_, R);
     finish<law::Coulomb>(R);
@@ -95,11 +97,12 @@ class ContactSolver {
   // `sweeps` nonlinear Gauss-Seidel sweeps of the solver's law from u0 (canonical), alternating
   // direction starting forward; returns the canonical iterate. A solution is a fixed point of this
   // map (the nodal rules keep every local solution), so it serves as an independent check.
-  std::vector<double> smooth(const double* u0, int sweeps) {
+  std::vector<double> smooth(const double* u0, int sweeps, Ordering ordering = Ordering::Lexicographic) {
     return with_law(law_, [&](auto L) {
       start(u0);
       P_.set_bounds_to_coefficients();
-      for (int k = 0; k < sweeps; ++k) NonlinearGaussSeidel<d, decltype(L)>::sweep(P_, it_.u.data(), k % 2 == 0);
+      const SweepOrder& order = fine_order(ordering);
+      for (int k = 0; k < sweeps; ++k) NonlinearGaussSeidel<d, decltype(L)>::sweep(P_, it_.u.data(), k % 2 == 0, order);
       std::vector<double> u = it_.u;
       P_.basis().to_canonical(u.data());
       return u;
@@ -118,6 +121,13 @@ class ContactSolver {
       if (fine) P_.basis().transform_prolongation(P.back());
     }
     return P;
+  }
+
+  // The order of the fine nonlinear sweeps (the colouring made once, on first use).
+  const SweepOrder& fine_order(Ordering o) {
+    if (o == Ordering::Lexicographic) return lexicographic_;
+    if (!fine_coloured_.coloured()) fine_coloured_ = SweepOrder().coloured_by<d>(P_.matrix());
+    return fine_coloured_;
   }
 
   void start(const double* u0) {
@@ -157,6 +167,7 @@ class ContactSolver {
   BuiltLinearization<d> built_;
   FineIterate<d> it_;
   Monitor mon_;
+  SweepOrder lexicographic_, fine_coloured_;
   int rebuilds0_ = 0;
   double rebuild_seconds0_ = 0;
 };

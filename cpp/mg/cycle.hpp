@@ -20,6 +20,12 @@ struct CycleOptions {
   // (triangles levels 3-7, quads 3-6, F = 0.4 and 5) 10, 50, 200 and 2000 gave the same cycle
   // counts, and 2000 (run to a relative change of 1e-14) cost 84 % of a quad level-3 solve.
   int coarsest_max_sweeps = 50;
+  // Gauss-Seidel order of every sweep (fine nonlinear, coarse projected): lexicographic, or by
+  // colours of the block graph (rows of a colour on all threads).
+  // Lexicographic by default: on the shared 2-core machine of issue 15 the coloured sweep was
+  // slower on one thread (neighbours of one colour are scattered: worse cache use) and the second
+  // thread gained nothing under load (docs/scaling.md, benchmarks/parallel_bandwidth.py).
+  Ordering ordering = Ordering::Lexicographic;
 };
 
 inline CycleType parse_cycle(const std::string& s) {
@@ -53,6 +59,17 @@ class CoarseCycle {
   void set_rows_to_smooth(int l, SweepOrder order) {
     order.check(H_.prolongation(l).cols);
     order_.at(l) = std::move(order);
+    coloured_.clear();
+  }
+  // The orders of the coarse levels' sweeps for `o` (the coloured ones built on first use: the
+  // coarse patterns are fixed once the hierarchy was first built).
+  const std::vector<SweepOrder>& orders(Ordering o) {
+    if (o == Ordering::Lexicographic) return order_;
+    if (coloured_.empty()) {
+      for (int l = 0; l < (int)order_.size(); ++l) coloured_.push_back(order_[l].coloured_by<d>(H_.matrix(l)));
+      coarsest_all_ = SweepOrder().coloured_by<d>(H_.matrix(0));
+    }
+    return coloured_;
   }
   std::size_t memory_bytes() const {
     std::size_t s = 0;
@@ -75,6 +92,7 @@ class CoarseCycle {
     if (bounded) restrict_bounds<d>(P, mask, lo_f, hi_f, C.lo.data(), C.hi.data());
     set_bounded(C, bounded);
     std::fill(C.x.begin(), C.x.end(), 0.0);
+    cur_ = &orders(opt.ordering);
     cycle(opt, top, opt.cycle);
     prolongate<d>(P, mask, C.x.data(), w);
   }
@@ -111,13 +129,14 @@ class CoarseCycle {
     Vectors& L = lv_[l];
     if (l == 0) { solve_coarsest(opt); return; }
     const BlockMatrix<d>& A = H_.matrix(l);
-    for (int s = 0; s < opt.nu1; ++s) sweep(l, true, order_[l]);
+    const SweepOrder& order = (*cur_)[l];
+    for (int s = 0; s < opt.nu1; ++s) sweep(l, true, order);
     const int visits = type == CycleType::V ? 1 : 2;
     Vectors& C = lv_[l - 1];
     const BlockMatrix<d>& P = H_.prolongation(l - 1);
     for (int v = 0; v < visits; ++v) {
       A.multiply(L.x.data(), L.r.data());
-      for (std::size_t k = 0; k < L.r.size(); ++k) L.r[k] = L.b[k] - L.r[k];
+      parallel_for((Index)L.r.size(), [&](Index k) { L.r[k] = L.b[k] - L.r[k]; });
       restrict_residual<d>(P, nullptr, L.r.data(), C.b.data());
       if (L.any_bounds) {
         // the coarser level gets the slack that remains on this one
@@ -131,7 +150,7 @@ class CoarseCycle {
       cycle(opt, l - 1, (type == CycleType::F && v == 1) ? CycleType::V : type);
       prolongate_add<d>(P, nullptr, C.x.data(), L.x.data());
     }
-    for (int s = 0; s < opt.nu2; ++s) sweep(l, false, order_[l]);
+    for (int s = 0; s < opt.nu2; ++s) sweep(l, false, order);
   }
 
   void solve_coarsest(const CycleOptions& opt) {
@@ -153,7 +172,8 @@ class CoarseCycle {
     for (Index k = 0; k < n; ++k) e += 0.5 * x[k] * L.r[k] - b[k] * x[k];
     if (!(e < 0)) x.setZero();
     double scale = 0;
-    const SweepOrder all;
+    const SweepOrder lexicographic;
+    const SweepOrder& all = opt.ordering == Ordering::Coloured ? coarsest_all_ : lexicographic;
     for (int s = 0; s < opt.coarsest_max_sweeps; ++s) {
       L.r = L.x;
       sweep(0, s % 2 == 0, all);
@@ -168,7 +188,9 @@ class CoarseCycle {
   }
 
   const GalerkinHierarchy<d>& H_;
-  std::vector<SweepOrder> order_;
+  std::vector<SweepOrder> order_, coloured_;
+  SweepOrder coarsest_all_;                      // every row of the coarsest level, coloured
+  const std::vector<SweepOrder>* cur_ = nullptr;  // the orders of the cycle under way
   std::vector<Vectors> lv_;
   std::vector<double> scratch_lo_, scratch_hi_;
 };

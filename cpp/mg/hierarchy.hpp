@@ -40,7 +40,7 @@ class GalerkinHierarchy {
   std::size_t memory_bytes() const {
     std::size_t s = 0;
     for (auto& L : lv_) s += L.A.memory_bytes() + sizeof(double) * L.Dinv.size();
-    for (auto& P : P_) s += 2 * P.memory_bytes();
+    for (auto& P : P_) s += P.memory_bytes();
     return s;
   }
 

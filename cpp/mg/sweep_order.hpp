@@ -1,9 +1,22 @@
-// Which rows of a level a Gauss-Seidel sweep visits, and in which order: every row forward or
-// backward today; a subset (the changed region of an adaptive hierarchy) or colours later.
+// Which rows of a level a Gauss-Seidel sweep visits, and in which order: every row or a subset
+// (the changed region of an adaptive hierarchy), lexicographic, or by colours of the block graph.
+// In the coloured order no two rows of one colour are coupled, so the rows of a colour are
+// updated at once (threads); the colouring does not depend on the thread count, so neither does
+// the result.
 #pragma once
-#include "common.hpp"
+#include "block_matrix.hpp"
+#include "parallel.hpp"
 
 namespace cmg {
+
+enum class Ordering : int { Lexicographic = 0, Coloured = 1 };
+
+inline Ordering parse_ordering(const std::string& s) {
+  if (s == "lexicographic") return Ordering::Lexicographic;
+  if (s == "coloured" || s == "colored") return Ordering::Coloured;
+  throw InputError("unknown ordering '" + s + "' (expected lexicographic or coloured)");
+}
+inline const char* ordering_name(Ordering o) { return o == Ordering::Coloured ? "coloured" : "lexicographic"; }
 
 class SweepOrder {
  public:
@@ -11,11 +24,59 @@ class SweepOrder {
   explicit SweepOrder(std::vector<Index> rows) : rows_(std::move(rows)), all_(false) {}
 
   bool all() const { return all_; }
+  bool coloured() const { return !colour_ptr_.empty(); }
   const std::vector<Index>& rows() const { return rows_; }
+  Index num_colours() const { return coloured() ? (Index)colour_ptr_.size() - 1 : 0; }
 
-  // f(i) for the rows of a level of n rows, in order (forward) or reversed.
+  // The same rows by colours of the block graph of A: greedy, visiting the rows in their order
+  // and giving each the smallest colour none of its coupled rows has; rows ascending per colour.
+  template <int d>
+  SweepOrder coloured_by(const BlockMatrix<d>& A) const {
+    std::vector<Index> rows = rows_;
+    if (all_) {
+      rows.resize(A.rows);
+      for (Index i = 0; i < A.rows; ++i) rows[i] = i;
+    }
+    std::vector<int> colour(A.rows, -1);
+    std::vector<Index> seen;  // seen[c] == i: colour c is taken by a neighbour of row i
+    int ncol = 0;
+    for (Index i : rows) {
+      for (Index k = A.indptr[i]; k < A.indptr[i + 1]; ++k) {
+        const int c = colour[A.indices[k]];
+        if (c >= 0) seen[c] = i;
+      }
+      int c = 0;
+      while (c < ncol && seen[c] == i) ++c;
+      if (c == ncol) { ++ncol; seen.push_back(-1); }
+      colour[i] = c;
+    }
+    SweepOrder S;
+    S.all_ = false;
+    S.colour_ptr_.assign(ncol + 1, 0);
+    for (Index i : rows) S.colour_ptr_[colour[i] + 1]++;
+    for (int c = 0; c < ncol; ++c) S.colour_ptr_[c + 1] += S.colour_ptr_[c];
+    std::vector<Index> fill(S.colour_ptr_.begin(), S.colour_ptr_.end() - 1);
+    S.rows_.resize(rows.size());
+    std::vector<Index> sorted = rows;
+    std::sort(sorted.begin(), sorted.end());
+    for (Index i : sorted) S.rows_[fill[colour[i]]++] = i;
+    return S;
+  }
+
+  // f(i) for the rows of a level of n rows, in order (forward) or reversed; coloured: the colours
+  // in order or reversed, the rows of one colour on all threads (f must then touch row i only).
   template <class F>
   void visit(Index n, bool forward, F&& f) const {
+    if (coloured()) {
+      const Index nc = num_colours();
+      for (Index cc = 0; cc < nc; ++cc) {
+        const Index c = forward ? cc : nc - 1 - cc;
+        const Index b = colour_ptr_[c], m = colour_ptr_[c + 1] - b;
+        const Index* r = rows_.data() + b;
+        parallel_for(m, [&](Index q) { f(r[q]); }, 1024);
+      }
+      return;
+    }
     if (all_) {
       for (Index ii = 0; ii < n; ++ii) f(forward ? ii : n - 1 - ii);
       return;
@@ -31,6 +92,7 @@ class SweepOrder {
 
  private:
   std::vector<Index> rows_;
+  std::vector<Index> colour_ptr_;  // coloured: rows_[colour_ptr_[c] .. colour_ptr_[c+1]) have colour c
   bool all_ = true;
 };
 

@@ -57,25 +57,25 @@ BlockMatrix<d> transpose(const BlockMatrix<d>& P) {
 // x_fine += diag(mask) P x_coarse
 template <int d>
 void prolongate_add(const BlockMatrix<d>& P, const std::uint8_t* mask, const double* xc, double* xf) {
-  for (Index i = 0; i < P.rows; ++i) {
+  parallel_for(P.rows, [&](Index i) {
     Vec<d> s = Vec<d>::Zero();
     for (Index k = P.indptr[i]; k < P.indptr[i + 1]; ++k) s.noalias() += P.block(k) * CVecMap<d>(xc + d * P.indices[k]);
     if (mask)
       for (int c = 0; c < d; ++c) s[c] *= mask[i * d + c];
     VecMap<d>(xf + d * i) += s;
-  }
+  });
 }
 
 // x_fine = diag(mask) P x_coarse
 template <int d>
 void prolongate(const BlockMatrix<d>& P, const std::uint8_t* mask, const double* xc, double* xf) {
-  for (Index i = 0; i < P.rows; ++i) {
+  parallel_for(P.rows, [&](Index i) {
     Vec<d> s = Vec<d>::Zero();
     for (Index k = P.indptr[i]; k < P.indptr[i + 1]; ++k) s.noalias() += P.block(k) * CVecMap<d>(xc + d * P.indices[k]);
     if (mask)
       for (int c = 0; c < d; ++c) s[c] *= mask[i * d + c];
     VecMap<d>(xf + d * i) = s;
-  }
+  });
 }
 
 // y_coarse = P^T diag(mask) r_fine

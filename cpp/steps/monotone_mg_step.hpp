@@ -33,11 +33,11 @@ class MonotoneMultigridStep {
 
  public:
   MonotoneMultigridStep(const ContactProblem<d>& P, GalerkinHierarchy<d>& H, CoarseCycle<d>& C, BuiltLinearization<d>& built,
-                        FineIterate<d>& it, const CycleOptions& opt)
-      : P_(P), H_(H), C_(C), built_(built), it_(it), opt_(opt) {
+                        FineIterate<d>& it, const CycleOptions& opt, const SweepOrder& fine_order = SweepOrder())
+      : P_(P), H_(H), C_(C), built_(built), it_(it), opt_(opt), order_(fine_order) {
     const Index n = P.num_nodes() * d;
     mask_ = P.base_mask();
-    r_.assign(n, 0.0); w_.assign(n, 0.0); old_.assign(n, 0.0); tmp_.assign(n, 0.0);
+    r_.assign(n, 0.0); w_.assign(n, 0.0); old_.assign(n, 0.0);
     lo_.assign(n, -kInf); hi_.assign(n, kInf);
   }
 
@@ -47,10 +47,10 @@ class MonotoneMultigridStep {
     const BlockMatrix<d>& A = P_.matrix();
     const std::vector<double>& f = P_.load();
     old_ = u;
-    for (int s = 0; s < opt_.nu1; ++s) Smoother::sweep(P_, u.data(), true);
+    for (int s = 0; s < opt_.nu1; ++s) Smoother::sweep(P_, u.data(), true, order_);
     pc.lap(Phase::PreSmooth);
     A.multiply(u.data(), r_.data());
-    for (std::size_t k = 0; k < r_.size(); ++k) r_[k] = f[k] - r_[k];
+    parallel_for((Index)r_.size(), [&](Index k) { r_[k] = f[k] - r_[k]; });
     const bool bounded = linearize();
     pc.lap(Phase::Linearize);
     rebuilt = mask_ != built_.mask || !same_blocks<d>(hessian_, built_.hessian);
@@ -61,14 +61,14 @@ class MonotoneMultigridStep {
     }
     pc.lap(Phase::CoarseUpdate);
     C_.correction(opt_, r_.data(), mask_.data(), lo_.data(), hi_.data(), bounded, w_.data(), P_.num_nodes());
-    for (std::size_t k = 0; k < u.size(); ++k) u[k] += w_[k];
+    parallel_for((Index)u.size(), [&](Index k) { u[k] += w_[k]; });
     pc.lap(Phase::CoarseCorrection);
-    for (int s = 0; s < opt_.nu2; ++s) Smoother::sweep(P_, u.data(), false);
+    for (int s = 0; s < opt_.nu2; ++s) Smoother::sweep(P_, u.data(), false, order_);
     pc.lap(Phase::PostSmooth);
-    for (std::size_t k = 0; k < u.size(); ++k) old_[k] = u[k] - old_[k];
+    parallel_for((Index)u.size(), [&](Index k) { old_[k] = u[k] - old_[k]; });
     A.multiply(old_.data(), tmp_.data());
-    double e = 0;
-    for (std::size_t k = 0; k < u.size(); ++k) { e += old_[k] * tmp_[k]; it_.Au[k] += tmp_[k]; }
+    parallel_for((Index)u.size(), [&](Index k) { it_.Au[k] += tmp_[k]; });
+    const double e = parallel_sum((Index)u.size(), [&](Index k) { return old_[k] * tmp_[k]; });
     pc.lap(Phase::Norm);
     return std::sqrt(std::max(e, 0.0));
   }
@@ -107,7 +107,7 @@ class MonotoneMultigridStep {
     if constexpr (!L::has_contact) return std::numeric_limits<double>::quiet_NaN();
     std::vector<double>& u = it_.u;
     old_ = u;
-    Smoother::sweep(P_, u.data(), true);
+    Smoother::sweep(P_, u.data(), true, order_);
     for (std::size_t k = 0; k < u.size(); ++k) std::swap(u[k], old_[k]);
     for (std::size_t k = 0; k < u.size(); ++k) old_[k] -= u[k];
     P_.matrix().multiply(old_.data(), tmp_.data());
@@ -140,8 +140,12 @@ class MonotoneMultigridStep {
   BuiltLinearization<d>& built_;
   FineIterate<d>& it_;
   CycleOptions opt_;
+  const SweepOrder& order_;  // of the fine nonlinear sweeps
   std::vector<std::uint8_t> mask_;
-  std::vector<double> r_, w_, old_, tmp_, lo_, hi_;
+  // tmp_ shares w_'s storage: the coarse correction w is added to u before A (u - u_old) needs
+  // the buffer (one fine vector less, issue 15)
+  std::vector<double> r_, w_, old_, lo_, hi_;
+  std::vector<double>& tmp_ = w_;
   std::vector<std::pair<Index, Mat<d>>> hessian_;
 };
 

@@ -33,8 +33,8 @@ class TnnmgStep {
 
  public:
   TnnmgStep(const ContactProblem<d>& P, GalerkinHierarchy<d>& H, CoarseCycle<d>& C, BuiltLinearization<d>& built,
-            FineIterate<d>& it, const CycleOptions& opt)
-      : P_(P), H_(H), C_(C), built_(built), it_(it), opt_(opt), checks_(P, H, C, built, it, opt) {
+            FineIterate<d>& it, const CycleOptions& opt, const SweepOrder& fine_order = SweepOrder())
+      : P_(P), H_(H), C_(C), built_(built), it_(it), opt_(opt), order_(fine_order), checks_(P, H, C, built, it, opt, fine_order) {
     const Index n = P.num_nodes() * d;
     mask_ = P.base_mask();
     r_.assign(n, 0.0); w_.assign(n, 0.0); Aw_.assign(n, 0.0); old_.assign(n, 0.0); tmp_.assign(n, 0.0);
@@ -48,7 +48,7 @@ class TnnmgStep {
     const BlockMatrix<d>& A = P_.matrix();
     const std::vector<double>& f = P_.load();
     old_ = u;
-    for (int s = 0; s < opt_.nu1; ++s) Smoother::sweep(P_, u.data(), true);
+    for (int s = 0; s < opt_.nu1; ++s) Smoother::sweep(P_, u.data(), true, order_);
     pc.lap(Phase::PreSmooth);
     A.multiply(u.data(), tmp_.data());  // A u of the smoothed iterate
     for (std::size_t k = 0; k < r_.size(); ++k) r_[k] = f[k] - tmp_[k];
@@ -67,7 +67,7 @@ class TnnmgStep {
     for (std::size_t k = 0; k < u.size(); ++k) { u[k] += step_ * w_[k]; tmp_[k] += step_ * Aw_[k]; }
     decrease_ = e_before - frozen_energy(u.data(), tmp_.data());
     pc.lap(Phase::CoarseCorrection);
-    for (int s = 0; s < opt_.nu2; ++s) Smoother::sweep(P_, u.data(), false);
+    for (int s = 0; s < opt_.nu2; ++s) Smoother::sweep(P_, u.data(), false, order_);
     pc.lap(Phase::PostSmooth);
     for (std::size_t k = 0; k < u.size(); ++k) old_[k] = u[k] - old_[k];
     A.multiply(old_.data(), tmp_.data());
@@ -147,6 +147,7 @@ class TnnmgStep {
   FineIterate<d>& it_;
   CycleOptions opt_;
   // energy record, error and the sweep check are the monotone step's (same iterate, same law)
+  const SweepOrder& order_;  // of the fine nonlinear sweeps
   MonotoneMultigridStep<d, L> checks_;
   FrozenLineSearch<d> ls_;
   std::vector<std::uint8_t> mask_;

@@ -1,5 +1,10 @@
 """contactmg: nonlinear monotone multigrid for elastic contact with Coulomb friction."""
-from . import _core  # noqa: F401
+import os as _os
+
+# Threads that wait at a barrier sleep rather than spin: the machine may be shared (a spinning
+# waiter on an occupied core made a 2-thread solve many times slower than 1 thread there).
+_os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
+from . import _core  # noqa: F401,E402
 from .friction import Coulomb, Frictionless, Tresca
 from .frames import contact_frames
 from .generators import (HERTZ_ARC, HERTZ_TOP, RECT_BOTTOM, RECT_LEFT, RECT_RIGHT, RECT_TOP, CircleProjector,

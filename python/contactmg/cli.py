@@ -93,6 +93,13 @@ def add_path_arguments(p) -> None:
                    help="load path: the stick and slip zones against the load step")
 
 
+def add_thread_options(p) -> None:
+    p.add_argument("--threads", type=_positive_int("--threads", 0, 4096), default=0,
+                   help="threads of the sweeps and products (default 0: all cores; the result does not depend on it)")
+    p.add_argument("--ordering", choices=["lexicographic", "coloured"], default="lexicographic",
+                   help="Gauss-Seidel order: colours of the block graph (parallel) or lexicographic")
+
+
 def _parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="contactmg", description="Multigrid for elastic contact with Coulomb friction")
     sub = p.add_subparsers(dest="command", required=True)
@@ -108,6 +115,7 @@ def _parser() -> argparse.ArgumentParser:
     h.add_argument("--nu1", type=_positive_int("--nu1", 0, 100), default=3)
     h.add_argument("--nu2", type=_positive_int("--nu2", 0, 100), default=3)
     h.add_argument("--hierarchy", choices=["uniform", "adaptive"], default="uniform")
+    add_thread_options(h)
     h.add_argument("--json", type=_writable, metavar="PATH|-")
     h.add_argument("--vtu", type=_with_suffix("--vtu", (".vtu",)), metavar="PATH")
     h.add_argument("--plot", type=_with_suffix("--plot", PLOT_SUFFIXES), metavar="PATH")
@@ -158,6 +166,7 @@ def hertz_report(args, problem, result) -> dict:
         "hertz_halfwidth": hertz.halfwidth(load) if load > 0 else None,
         "hertz_peak_pressure": hertz.peak_pressure(load) if load > 0 else None,
         "peak_rss_mb": peak_rss_mb(),
+        "threads": result.extra.get("threads"), "ordering": result.extra.get("ordering"),
         "hierarchy": problem.hierarchy.kind,
     }
     if problem.hierarchy.estimated_error:
@@ -193,7 +202,8 @@ def run_hertz(args) -> int:
         path = cli_path.solve(args, problem, [HERTZ_TOP], (0.0, TOP_DISPLACEMENT), (args.shear or 0.0, 0.0))
         result = path.last
     else:
-        result = problem.solve(args.method, tol=args.tol, max_cycles=args.max_cycles)
+        result = problem.solve(args.method, tol=args.tol, max_cycles=args.max_cycles, threads=args.threads,
+                               ordering=args.ordering)
     report = hertz_report(args, problem, result)
     if cli_path.wanted(args):
         cli_path.report(args, path, report)

@@ -20,6 +20,7 @@ def _common(p, levels_default):
     p.add_argument("--cycle", choices=["V", "W", "F"], default="F")
     p.add_argument("--nu1", type=cli._positive_int("--nu1", 0, 100), default=3)
     p.add_argument("--nu2", type=cli._positive_int("--nu2", 0, 100), default=3)
+    cli.add_thread_options(p)
     p.add_argument("--json", type=cli._writable, metavar="PATH|-")
     p.add_argument("--vtu", type=cli._with_suffix("--vtu", (".vtu",)), metavar="PATH")
     p.add_argument("-q", "--quiet", action="store_true")
@@ -105,7 +106,8 @@ def run_sphere(args) -> int:
                               position=sphere.radial_distance, label="distance from the axis")
         result = path.last
     else:
-        result = problem.solve(args.method, tol=args.tol, max_cycles=args.max_cycles)
+        result = problem.solve(args.method, tol=args.tol, max_cycles=args.max_cycles, threads=args.threads,
+                               ordering=args.ordering)
     report = _report(args, problem, result, "sphere")
     if path is not None:
         cli_path.report(args, path, report, zone=lambda r, states: sphere.radius_of(r, states), radii=True)
@@ -154,7 +156,8 @@ def run_cork(args) -> int:
                               position=lambda r: r.mesh.points[r.contact_nodes, 2], label="z")
         result = path.last
     else:
-        result = problem.solve(args.method, tol=args.tol, max_cycles=args.max_cycles)
+        result = problem.solve(args.method, tol=args.tol, max_cycles=args.max_cycles, threads=args.threads,
+                               ordering=args.ordering)
     report = _report(args, problem, result, "cork")
     if path is not None:
         cli_path.report(args, path, report, zone=lambda r, states: sphere.radius_of(r, states), radii=True)

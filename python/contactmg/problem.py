@@ -26,6 +26,10 @@ INT32_MAX = 2 ** 31 - 1  # the core counts cycles in a C int
 # The redesigned core (issue 9) takes cycle, nu1, nu2 and a progress callback per solve; an older
 # core takes the cycle at construction only, and then one core solver is kept per cycle choice.
 SOLVE_TAKES_CYCLE_OPTIONS = "progress" in (_core.ContactSolver2D.solve.__doc__ or "")
+# Issue 15: threads= and ordering= per solve (coloured Gauss-Seidel sweeps).
+SOLVE_TAKES_THREADS = "threads" in (_core.ContactSolver2D.solve.__doc__ or "")
+ORDERINGS = ("coloured", "lexicographic")
+CORE_TAKES_MATRIX = "take_matrix" in (_core.ContactSolver2D.__init__.__doc__ or "")
 
 
 def tag_tuple(tags, name: str) -> tuple:
@@ -190,7 +194,7 @@ class ContactProblem:
         self.hierarchy, self.material, self.friction = hierarchy, material, friction
         self.benchmark: Optional[str] = None  # "hertz" for the Hertz benchmark (its zones are centred on x = 0)
         mesh = self.mesh = hierarchy.finest
-        self.A = _core.assemble_elasticity(mesh.points, mesh.cells, mesh.cell_type, material.E, material.nu)
+        self._A = _core.assemble_elasticity(mesh.points, mesh.cells, mesh.cell_type, material.E, material.nu)
         self.load = assemble_load(mesh, body_force, traction)
         self.fixed, self.fixed_values = dirichlet_arrays(mesh, dirichlet)
         self._check_rigid_motion()
@@ -199,6 +203,20 @@ class ContactProblem:
         self._solvers: Dict[CycleOptions, object] = {}
         self._build_seconds: Dict[CycleOptions, float] = {}
         self.assembly_seconds = time.perf_counter() - t0 + hierarchy.build_seconds
+
+    @property
+    def A(self):
+        """The stiffness matrix (canonical axes, no boundary conditions). A core solver takes it
+        over when it is built (the fine matrix is then held once, issue 15); asking for it again
+        assembles it anew."""
+        if self._A is None:
+            self._A = self._assemble_matrix()
+        return self._A
+
+    def _assemble_matrix(self):
+        """The matrix of this problem's unknowns (a subclass with another basis assembles its own)."""
+        m = self.mesh
+        return _core.assemble_elasticity(m.points, m.cells, m.cell_type, self.material.E, self.material.nu)
 
     # -- compatibility: the defaults of solve() ---------------------------------------------------
     @property
@@ -298,17 +316,24 @@ class ContactProblem:
         return "linear" if len(self.contact.nodes) == 0 else self.friction.law
 
     def _new_core_solver(self, law: str, options: CycleOptions, frame_fixed=None, frame_values=None, load=None,
-                         fixed_values=None):
+                         fixed_values=None, take_matrix: bool = False):
         """A core solver of this problem's matrix and data (building one does not re-assemble).
         frame_fixed/frame_values (num_contact, d): components of the contact nodes fixed in their
-        frames on top of the Dirichlet data (the known-state linear reference)."""
+        frames on top of the Dirichlet data (the known-state linear reference). take_matrix: the
+        core takes the assembled matrix over (one fine matrix in memory; `A` is assembled again
+        when asked for) -- for the solver kept for the problem's life, not for passing ones."""
         d = self.mesh.dim
         cls = _core.ContactSolver2D if d == 2 else _core.ContactSolver3D
         c = self.contact
         values = self.fixed_values if fixed_values is None else fixed_values  # a load path's step: its own values
-        return cls(self.A, self.load if load is None else load, self.fixed, values, c.nodes, c.normals,
-                   c.gaps, self.coefficients, law, [t.as_tuple() for t in self.hierarchy.transfers], options.cycle,
-                   options.nu1, options.nu2, frame_fixed=frame_fixed, frame_values=frame_values)
+        args = (self.load if load is None else load, self.fixed, values, c.nodes, c.normals,
+                c.gaps, self.coefficients, law, [t.as_tuple() for t in self.hierarchy.transfers], options.cycle,
+                options.nu1, options.nu2)
+        if not (CORE_TAKES_MATRIX and take_matrix):
+            return cls(self.A, *args, frame_fixed=frame_fixed, frame_values=frame_values)
+        # The core takes the assembled matrix over (left empty here): one fine matrix in memory.
+        A, self._A = self.A, None
+        return cls(A, *args, frame_fixed=frame_fixed, frame_values=frame_values, take_matrix=True)
 
     def core_solver(self, cycle: Optional[str] = None, nu1: Optional[int] = None, nu2: Optional[int] = None):
         """The core solver for the cycle options (defaults: the problem's), built on first use and
@@ -317,7 +342,7 @@ class ContactProblem:
         key = self._solver_key(options)
         if key not in self._solvers:
             t0 = time.perf_counter()
-            self._solvers[key] = self._new_core_solver(self.law, key)
+            self._solvers[key] = self._new_core_solver(self.law, key, take_matrix=True)
             self._build_seconds[key] = time.perf_counter() - t0
         return self._solvers[key]
 
@@ -341,7 +366,8 @@ class ContactProblem:
               fixed_point_tol: float = 1e-9, fixed_point_max: int = 100,
               error_reference: Optional[np.ndarray] = None, cycle: Optional[str] = None,
               nu1: Optional[int] = None, nu2: Optional[int] = None,
-              progress: Optional[Callable[[dict], None]] = None) -> ContactResult:
+              progress: Optional[Callable[[dict], None]] = None, threads: int = 0,
+              ordering: Optional[str] = None) -> ContactResult:
         """Solve with `method`: "nmg" (Algorithm 2 for Coulomb; truncated monotone multigrid for
         frictionless and Tresca; linear multigrid without contact), "tnnmg" (truncated nonsmooth
         Newton multigrid: the fine nonlinear sweeps, one linear cycle for the truncated Newton
@@ -355,7 +381,11 @@ class ContactProblem:
         `progress(record)` is called after every cycle with a dict (cycle, outer,
         correction_norm, energy, seconds, error, active, stick, slip, rebuilt) by a core that
         reports cycles (SOLVE_TAKES_CYCLE_OPTIONS); an exception it raises stops the solve. With an
-        older core, which runs all cycles in one call, asking for it is an error."""
+        older core, which runs all cycles in one call, asking for it is an error. `threads`: the
+        threads of the sweeps, products and norms (0: all cores); the result is the same bit for
+        bit on any count. `ordering` of every Gauss-Seidel sweep: "coloured" (the default: colours
+        of the block graph, the rows of one colour at once) or "lexicographic" (one thread for the
+        sweeps)."""
         if method not in METHODS:
             raise ValueError(f"method must be one of {METHODS}, got {method!r}")
         options = self._options(cycle, nu1, nu2)
@@ -369,8 +399,14 @@ class ContactProblem:
                 raise ValueError(f"{name} must be an integer in 1..{INT32_MAX}, got {v!r}")
         if progress is not None and not callable(progress):
             raise ValueError(f"progress must be a callable (called with a dict after every cycle), got {progress!r}")
+        if isinstance(threads, (bool, np.bool_)) or not isinstance(threads, (int, np.integer)) or not 0 <= threads <= 4096:
+            raise ValueError(f"threads must be an integer in 0..4096 (0: all cores), got {threads!r}")
+        if ordering is not None and ordering not in ORDERINGS:
+            raise ValueError(f"ordering must be one of {ORDERINGS}, got {ordering!r}")
         kw = dict(tol=float(tol), rtol=float(rtol), max_cycles=int(max_cycles), fixed_point_tol=float(fixed_point_tol),
                   fixed_point_max=int(fixed_point_max), reference=error_reference)
+        if SOLVE_TAKES_THREADS:
+            kw.update(threads=int(threads), ordering=ordering)
         if SOLVE_TAKES_CYCLE_OPTIONS:
             kw.update(cycle=options.cycle, nu1=options.nu1, nu2=options.nu2, progress=progress)
         elif progress is not None:
@@ -390,7 +426,7 @@ class ContactProblem:
             return self._result(solver.solve(u0, **kw), method, options)
         if reference is None:
             reference = self.solve("nmg", tol=tol, rtol=rtol, max_cycles=max_cycles, cycle=options.cycle,
-                                   nu1=options.nu1, nu2=options.nu2)
+                                   nu1=options.nu1, nu2=options.nu2, threads=threads, ordering=ordering)
         t0 = time.perf_counter()
         solver = self._known_state_solver(reference, options)
         build = time.perf_counter() - t0
@@ -407,6 +443,8 @@ class ContactProblem:
         res = ContactResult.from_raw(self, raw, method)
         res.setup_seconds = self.assembly_seconds + self._build_seconds.get(self._solver_key(options), 0.0)
         res.extra["cycle_options"] = {"cycle": options.cycle, "nu1": options.nu1, "nu2": options.nu2}
+        if "threads" in raw:
+            res.extra["threads"], res.extra["ordering"] = int(raw["threads"]), str(raw["ordering"])
         return res
 
     def _known_state_solver(self, ref: ContactResult, options: CycleOptions):

@@ -137,7 +137,8 @@ class TwoBodyProblem(ContactProblem):
         A = sp.block_diag([_bsr(p.A, p.mesh.num_points, d) for p in self.parts], format="csr")
         self.A_canonical = A
         self.load_canonical = np.vstack([p.load for p in self.parts])
-        self.A = _block_matrix((Tk.T @ A @ Tk).tocsr(), d)
+        self._Tk = Tk
+        self._A = self._assemble_matrix()
         self.load = (Tk.T @ self.load_canonical.ravel()).reshape(n, d)
         self.fixed = np.vstack([p.fixed for p in self.parts])
         self.fixed_values = np.vstack([p.fixed_values for p in self.parts])
@@ -162,6 +163,11 @@ class TwoBodyProblem(ContactProblem):
                              f"{list(self.pair.nonmortar_tags)} (in the region)")
         return sel
 
+    def _assemble_matrix(self):
+        """T^T A T of the bodies' block-diagonal stiffness (the core may take the matrix over; asking
+        for `A` again comes here, not to a one-mesh assembly)."""
+        return _block_matrix((self._Tk.T @ self.A_canonical @ self._Tk).tocsr(), self.mesh.dim)
+
     def _coupling(self) -> MortarCoupling:
         sm, mm = self.parts[self.pair.nonmortar].mesh, self.parts[self.pair.mortar].mesh
         msel = np.isin(mm.facet_tags, list(tag_tuple(self.pair.mortar_tags, "mortar_tags")))
@@ -185,9 +191,12 @@ class TwoBodyProblem(ContactProblem):
         """u = T w = w + N w."""
         return w + self.N @ w
 
-    def _new_core_solver(self, law: str, options: CycleOptions, frame_fixed=None, frame_values=None, load=None):
+    def _new_core_solver(self, law: str, options: CycleOptions, frame_fixed=None, frame_values=None, load=None,
+                         fixed_values=None, take_matrix: bool = False):
+        # the transformed matrix stays here (take_matrix is declined): it is what checks and reports multiply with
         c = self.contact
-        return _core.ContactSolver2D(self.A, self.load if load is None else load, self.fixed, self.fixed_values,
+        values = self.fixed_values if fixed_values is None else fixed_values
+        return _core.ContactSolver2D(self.A, self.load if load is None else load, self.fixed, values,
                                      c.nodes, c.normals, c.gaps, self.coefficients, law,
                                      [t.as_tuple() for t in self.transfers], options.cycle, options.nu1, options.nu2,
                                      frame_fixed=frame_fixed, frame_values=frame_values)
