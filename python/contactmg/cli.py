@@ -100,6 +100,21 @@ def add_thread_options(p) -> None:
                    help="Gauss-Seidel order: colours of the block graph (parallel) or lexicographic")
 
 
+def write_boundary_stress_plot(result, friction: float, path: str) -> None:
+    """Figure 2 (middle) of a 2D result: boundary stresses with the stick and slip zones."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from .plots import plot_boundary_stress
+
+    fig, ax = plt.subplots(figsize=(7, 4))
+    plot_boundary_stress(result, ax=ax, friction=friction, margin=1.5)
+    fig.tight_layout()
+    fig.savefig(path, dpi=150)
+    plt.close(fig)
+
+
 def _parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="contactmg", description="Multigrid for elastic contact with Coulomb friction")
     sub = p.add_subparsers(dest="command", required=True)
@@ -212,16 +227,7 @@ def run_hertz(args) -> int:
     if args.vtu:
         result.write_vtu(args.vtu)
     if args.plot:
-        from .plots import plot_boundary_stress
-        import matplotlib
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-
-        fig, ax = plt.subplots(figsize=(7, 4))
-        plot_boundary_stress(result, ax=ax, friction=args.friction, margin=1.5)
-        fig.tight_layout()
-        fig.savefig(args.plot, dpi=150)
-        plt.close(fig)
+        write_boundary_stress_plot(result, args.friction, args.plot)
     if not args.quiet:
         stream = sys.stderr if args.json == "-" else sys.stdout
         print(f"hertz {args.cell} levels={args.levels} dofs={report['dofs']} F={args.friction} method={args.method}: "

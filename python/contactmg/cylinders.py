@@ -94,7 +94,7 @@ def add_parser(sub):
 
 
 def run_cylinders(args) -> int:
-    from .cli import EXIT_NO_CONVERGENCE, EXIT_OK, _emit_json, hertz_report
+    from .cli import EXIT_NO_CONVERGENCE, EXIT_OK, _emit_json, hertz_report, write_boundary_stress_plot
 
     if not (-1.0 < args.nu2 < 0.5):
         raise ValueError(f"--nu2: Poisson's ratio must lie in (-1, 0.5), got {args.nu2}")
@@ -118,16 +118,7 @@ def run_cylinders(args) -> int:
     if args.vtu:
         problem.write_vtu(args.vtu, result)
     if args.plot:
-        from .plots import plot_boundary_stress
-        import matplotlib
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-
-        fig, ax = plt.subplots(figsize=(7, 4))
-        plot_boundary_stress(result, ax=ax, friction=args.friction, margin=1.5)
-        fig.tight_layout()
-        fig.savefig(args.plot, dpi=150)
-        plt.close(fig)
+        write_boundary_stress_plot(result, args.friction, args.plot)
     if not args.quiet:
         stream = sys.stderr if args.json == "-" else sys.stdout
         hw, p0 = report["hertz_halfwidth"], report["hertz_p0"]

@@ -26,7 +26,7 @@ class CircleProjector:
         v = out[sel] - self.center
         r = np.linalg.norm(v, axis=1)
         if np.any(r == 0):
-            raise ValueError("cannot project the circle's centre onto the circle")
+            raise ValueError("cannot project the centre onto the circle (sphere)")
         out[sel] = self.center + self.radius * v / r[:, None]
         return out
 

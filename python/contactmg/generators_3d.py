@@ -10,29 +10,20 @@ from typing import Iterable, Tuple
 
 import numpy as np
 
+from .generators import CircleProjector
+
 from .mesh import Mesh
 
 BALL_SURFACE, BALL_TOP = 1, 2
 CORK_SIDE, CORK_TOP, CORK_BOTTOM = 1, 2, 3
 
 
-class SphereProjector:
-    """Moves points whose tag is in `tags` radially onto the sphere (center, radius)."""
+class SphereProjector(CircleProjector):
+    """Moves points whose tag is in `tags` radially onto the sphere (center, radius): the circle
+    projector of 2D, which works in any dimension."""
 
     def __init__(self, center, radius: float, tags: Iterable[int] = (BALL_SURFACE,)):
-        self.center = np.asarray(center, dtype=float)
-        self.radius = float(radius)
-        self.tags = tuple(tags)
-
-    def __call__(self, points: np.ndarray, tags: np.ndarray) -> np.ndarray:
-        out = np.array(points, dtype=float, copy=True)
-        sel = np.isin(tags, self.tags)
-        v = out[sel] - self.center
-        r = np.linalg.norm(v, axis=1)
-        if np.any(r == 0):
-            raise ValueError("cannot project the sphere's centre onto the sphere")
-        out[sel] = self.center + self.radius * v / r[:, None]
-        return out
+        super().__init__(center, radius, tags)
 
 
 class CylinderProjector:
