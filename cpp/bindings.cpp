@@ -410,6 +410,21 @@ void bind_dim(py::module_& m) {
   });
 }
 
+// The fine mesh and the interpolation of one refinement step (uniform or bisection) as numpy arrays.
+py::dict refined_to_dict(const RefinedMesh& R, int d, int k, int kf) {
+  py::dict out;
+  out["points"] = to_numpy(R.points, {(py::ssize_t)R.points.size() / d, d});
+  out["cells"] = to_numpy(R.cells, {(py::ssize_t)R.cells.size() / k, k});
+  out["facets"] = to_numpy(R.facets, {(py::ssize_t)R.facets.size() / kf, kf});
+  out["facet_tags"] = to_numpy(R.facet_tags, {(py::ssize_t)R.facet_tags.size()});
+  out["ptr"] = to_numpy(R.ptr, {(py::ssize_t)R.ptr.size()});
+  out["parent"] = to_numpy(R.parent, {(py::ssize_t)R.parent.size()});
+  out["weight"] = to_numpy(R.weight, {(py::ssize_t)R.weight.size()});
+  out["boundary_nodes"] = to_numpy(R.boundary_nodes, {(py::ssize_t)R.boundary_nodes.size()});
+  out["boundary_tags"] = to_numpy(R.boundary_tags, {(py::ssize_t)R.boundary_tags.size()});
+  return out;
+}
+
 }  // namespace
 
 PYBIND11_MODULE(_core, m) {
@@ -502,18 +517,7 @@ PYBIND11_MODULE(_core, m) {
       R = v.d == 2 ? refine_2d(v.type, v.X, v.n, v.C, v.m, facets.data(), facet_tags.data(), facets.shape(0))
                    : refine_3d(v.type, v.X, v.n, v.C, v.m, facets.data(), facet_tags.data(), facets.shape(0));
     }
-    const py::ssize_t nf = R.points.size() / v.d;
-    py::dict out;
-    out["points"] = to_numpy(R.points, {nf, v.d});
-    out["cells"] = to_numpy(R.cells, {(py::ssize_t)R.cells.size() / v.k, v.k});
-    out["facets"] = to_numpy(R.facets, {(py::ssize_t)R.facets.size() / kf, kf});
-    out["facet_tags"] = to_numpy(R.facet_tags, {(py::ssize_t)R.facet_tags.size()});
-    out["ptr"] = to_numpy(R.ptr, {(py::ssize_t)R.ptr.size()});
-    out["parent"] = to_numpy(R.parent, {(py::ssize_t)R.parent.size()});
-    out["weight"] = to_numpy(R.weight, {(py::ssize_t)R.weight.size()});
-    out["boundary_nodes"] = to_numpy(R.boundary_nodes, {(py::ssize_t)R.boundary_nodes.size()});
-    out["boundary_tags"] = to_numpy(R.boundary_tags, {(py::ssize_t)R.boundary_tags.size()});
-    return out;
+    return refined_to_dict(R, v.d, v.k, kf);
   });
 
   m.def("bisect", [](DArr points, IArr cells, IArr facets, IArr facet_tags, IArr marked_cells) {
@@ -521,24 +525,13 @@ PYBIND11_MODULE(_core, m) {
     require_shape(facets, "facets", {-1, 2});
     require_shape(facet_tags, "facet_tags", {facets.shape(0)});
     require_shape(marked_cells, "marked_cells", {-1});
-    BisectedMesh R;
+    RefinedMesh R;
     {
       py::gil_scoped_release r;
       R = bisect_2d(v.X, v.n, v.C, v.m, facets.data(), facet_tags.data(), facets.shape(0), marked_cells.data(),
                     marked_cells.shape(0));
     }
-    const py::ssize_t nf = R.points.size() / 2;
-    py::dict out;
-    out["points"] = to_numpy(R.points, {nf, 2});
-    out["cells"] = to_numpy(R.cells, {(py::ssize_t)R.cells.size() / 3, 3});
-    out["facets"] = to_numpy(R.facets, {(py::ssize_t)R.facets.size() / 2, 2});
-    out["facet_tags"] = to_numpy(R.facet_tags, {(py::ssize_t)R.facet_tags.size()});
-    out["ptr"] = to_numpy(R.ptr, {(py::ssize_t)R.ptr.size()});
-    out["parent"] = to_numpy(R.parent, {(py::ssize_t)R.parent.size()});
-    out["weight"] = to_numpy(R.weight, {(py::ssize_t)R.weight.size()});
-    out["boundary_nodes"] = to_numpy(R.boundary_nodes, {(py::ssize_t)R.boundary_nodes.size()});
-    out["boundary_tags"] = to_numpy(R.boundary_tags, {(py::ssize_t)R.boundary_tags.size()});
-    return out;
+    return refined_to_dict(R, 2, 3, 2);
   }, py::arg("points"), py::arg("cells"), py::arg("facets"), py::arg("facet_tags"), py::arg("marked_cells"),
      "Newest-vertex bisection of the marked triangles with conforming closure (refinement edge: the "
      "first two vertices of a cell); the same keys as refine()");

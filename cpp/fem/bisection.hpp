@@ -17,18 +17,9 @@
 #include <algorithm>
 #include <array>
 #include <utility>
-#include "../common.hpp"
+#include "refine_2d.hpp"  // RefinedMesh: the same output as uniform refinement
 
 namespace cmg {
-
-struct BisectedMesh {
-  std::vector<double> points;
-  std::vector<Index> cells, facets, facet_tags;
-  // interpolation: fine node i = sum_k weight[k] * coarse node parent[k], k in [ptr[i], ptr[i+1])
-  std::vector<Index> ptr, parent;
-  std::vector<double> weight;
-  std::vector<Index> boundary_nodes, boundary_tags;  // new nodes on boundary facets, with their facet's tag
-};
 
 namespace nvb_detail {
 
@@ -74,7 +65,7 @@ class Edges {
 }  // namespace nvb_detail
 
 // points: n x 2, cells: m x 3 (refinement edge first), facets: nf x 2 with tags, marked: cell ids.
-inline BisectedMesh bisect_2d(const double* points, Index n, const Index* cells, Index m, const Index* facets,
+inline RefinedMesh bisect_2d(const double* points, Index n, const Index* cells, Index m, const Index* facets,
                               const Index* tags, Index nf, const Index* marked, Index nm) {
   constexpr int d = 2;
   nvb_detail::Edges edges(n, cells, m);
@@ -100,7 +91,7 @@ inline BisectedMesh bisect_2d(const double* points, Index n, const Index* cells,
     if (split[edges.of_cell(c, 1)] || split[edges.of_cell(c, 2)]) mark(edges.of_cell(c, 0));
   }
 
-  BisectedMesh R;
+  RefinedMesh R;
   std::vector<Index> mid(ne, -1);
   Index n_fine = n;
   for (Index e = 0; e < ne; ++e)
