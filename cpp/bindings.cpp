@@ -8,6 +8,7 @@
 #include "contact_solver.hpp"
 #include "fem/assembly.hpp"
 #include "fem/bisection.hpp"
+#include "fem/bisection_3d.hpp"
 #include "fem/refine_2d.hpp"
 #include "fem/refine_3d.hpp"
 
@@ -520,19 +521,46 @@ PYBIND11_MODULE(_core, m) {
     return refined_to_dict(R, v.d, v.k, kf);
   });
 
-  m.def("bisect", [](DArr points, IArr cells, IArr facets, IArr facet_tags, IArr marked_cells) {
-    MeshView v = view(points, cells, "triangle");
-    require_shape(facets, "facets", {-1, 2});
+  m.def("bisect", [](DArr points, IArr cells, IArr facets, IArr facet_tags, IArr marked_cells, py::object marks,
+                     int generations) {
+    const bool three = points.ndim() == 2 && points.shape(1) == 3;
+    MeshView v = view(points, cells, three ? "tetra" : "triangle");
+    require_shape(facets, "facets", {-1, three ? 3 : 2});
     require_shape(facet_tags, "facet_tags", {facets.shape(0)});
     require_shape(marked_cells, "marked_cells", {-1});
-    RefinedMesh R;
+    if (!three) {
+      if (!marks.is_none()) throw InputError("marks are for tetrahedra: a triangle's state is its vertex order");
+      RefinedMesh R;
+      {
+        py::gil_scoped_release r;
+        R = bisect_2d(v.X, v.n, v.C, v.m, facets.data(), facet_tags.data(), facets.shape(0), marked_cells.data(),
+                      marked_cells.shape(0));
+      }
+      return refined_to_dict(R, 2, 3, 2);
+    }
+    IArr state;
+    if (!marks.is_none()) {
+      state = marks.cast<IArr>();
+      require_shape(state, "marks", {v.m});
+    }
+    Bisected3D B;
     {
       py::gil_scoped_release r;
-      R = bisect_2d(v.X, v.n, v.C, v.m, facets.data(), facet_tags.data(), facets.shape(0), marked_cells.data(),
-                    marked_cells.shape(0));
+      B = bisect_3d(v.X, v.n, v.C, v.m, facets.data(), facet_tags.data(), facets.shape(0), marked_cells.data(),
+                    marked_cells.shape(0), marks.is_none() ? nullptr : state.data(), generations);
     }
-    return refined_to_dict(R, 2, 3, 2);
+    py::dict out = refined_to_dict(B.mesh, 3, 4, 3);
+    out["marks"] = to_numpy(B.marks, {(py::ssize_t)B.marks.size()});
+    out["edge_parents"] = to_numpy(B.edge_parents, {(py::ssize_t)B.edge_parents.size() / 2, 2});
+    out["bisections"] = B.bisections;
+    return out;
   }, py::arg("points"), py::arg("cells"), py::arg("facets"), py::arg("facet_tags"), py::arg("marked_cells"),
-     "Newest-vertex bisection of the marked triangles with conforming closure (refinement edge: the "
-     "first two vertices of a cell); the same keys as refine()");
+     py::arg("marks") = py::none(), py::arg("generations") = 3,
+     "Newest-vertex bisection of the marked cells with conforming closure; the same keys as refine(). "
+     "Triangles (points n x 2): the refinement edge is the first two vertices of a cell, every edge of a "
+     "marked cell is bisected. Tetrahedra (points n x 3): Arnold-Mukherjee-Pouly marked bisection, every "
+     "marked cell bisected `generations` times; `marks` is the state of the cells from the previous call "
+     "(None: the initial longest-edge marking of this mesh); the result adds 'marks' (the state of the "
+     "fine cells, whose vertex order it also fixes), 'edge_parents' (the two ends of the edge each new "
+     "node bisects) and 'bisections'");
 }

@@ -33,6 +33,8 @@ def add_parsers(sub) -> None:
     s.add_argument("--cell", choices=["tetra", "hexahedron"], default="hexahedron")
     _common(s, sphere.DEFAULT_LEVELS)
     s.add_argument("--displacement", type=cli._nonneg_float("--displacement", positive=True), default=sphere.DISPLACEMENT)
+    s.add_argument("--hierarchy", choices=list(sphere.HIERARCHIES), default="uniform",
+                   help="adaptive: refined by the hierarchical estimator and bisection (tetra only)")
     s.add_argument("--plot", type=cli._with_suffix("--plot", PLOT_SUFFIXES), metavar="PATH")
     cli.add_path_arguments(s)
     c = sub.add_parser("cork", help="the cork pushed into a narrowing bottle neck (3D, Figure 2 right)")
@@ -97,9 +99,12 @@ def run_sphere(args) -> int:
     from .generators_3d import BALL_TOP
 
     cli_path.check(args)
+    if args.hierarchy == "adaptive" and args.cell != "tetra":
+        raise ValueError(f"--hierarchy adaptive is for simplices (bisection of tetrahedra): use --cell tetra, "
+                         f"not {args.cell}")
     problem = sphere.sphere_problem(args.cell, args.levels, args.friction, args.displacement,
                                     coulomb_at_zero=args.method == "fixed-point", cycle=args.cycle, nu1=args.nu1,
-                                    nu2=args.nu2)
+                                    nu2=args.nu2, hierarchy=args.hierarchy)
     path = None
     if cli_path.wanted(args):
         path = cli_path.solve(args, problem, [BALL_TOP], (0.0, 0.0, -args.displacement), (args.shear or 0.0, 0.0, 0.0),

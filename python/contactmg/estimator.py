@@ -98,10 +98,9 @@ def hierarchical_estimate(refined_problem, u_fine: np.ndarray, n_coarse: int, co
     eta2 = np.maximum(eta2, 0.0)
     if edges is None:
         edges = _edges(coarse_mesh)
-    cells = coarse_mesh.cells
-    k = cells.shape[1]
-    ce = np.stack([cells, np.roll(cells, -1, axis=1)], -1).reshape(-1, 2)
-    eid = _edge_ids(edges, ce, coarse_mesh.num_points).reshape(-1, k)
+    local = _local_edges(coarse_mesh.cell_type)
+    ce = coarse_mesh.cells[:, local].reshape(-1, 2)
+    eid = _edge_ids(edges, ce, coarse_mesh.num_points).reshape(-1, len(local))
     count = np.bincount(eid.ravel(), minlength=len(edges))
     cell_eta2 = (eta2[eid] / count[eid]).sum(axis=1)
     return Estimate(coarse_mesh, edges, eta2, cell_eta2)
@@ -127,9 +126,19 @@ def _frozen_bounds(P, ids, n_coarse, s_n, coarse_nodes) -> np.ndarray:
     return P.coefficients[ids] * p * c.measure[ids]
 
 
+# the edges of a cell as pairs of its local vertices
+_LOCAL_EDGES = {"triangle": [(0, 1), (1, 2), (2, 0)], "quad": [(0, 1), (1, 2), (2, 3), (3, 0)],
+                "tetra": [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)]}
+
+
+def _local_edges(cell_type: str) -> np.ndarray:
+    if cell_type not in _LOCAL_EDGES:
+        raise ValueError(f"the hierarchical estimator has no edge list for {cell_type} cells")
+    return np.array(_LOCAL_EDGES[cell_type])
+
+
 def _edges(mesh: Mesh) -> np.ndarray:
-    k = mesh.cells.shape[1]
-    e = np.sort(np.stack([mesh.cells, np.roll(mesh.cells, -1, axis=1)], -1).reshape(-1, 2), axis=1)
+    e = np.sort(mesh.cells[:, _local_edges(mesh.cell_type)].reshape(-1, 2), axis=1)
     return np.unique(e, axis=0)
 
 
@@ -169,8 +178,8 @@ def estimate(hierarchy, problem_factory: Callable, result, projector=None) -> Es
     from .hierarchy import MeshHierarchy, _refined
 
     mesh = hierarchy.finest
-    if mesh.cell_type != "triangle":
-        raise ValueError(f"the hierarchical estimator is implemented for triangles, got {mesh.cell_type}")
+    if mesh.cell_type not in ("triangle", "tetra"):
+        raise ValueError(f"the hierarchical estimator is implemented for triangles and tetrahedra, got {mesh.cell_type}")
     u = np.asarray(result.displacement)
     if u.shape != (mesh.num_points, mesh.dim):
         raise ValueError(f"the result does not belong to the finest level: displacement shape {u.shape}, "

@@ -98,6 +98,9 @@ class MeshHierarchy:
     # adaptive hierarchies: the estimated error (hierarchical estimator, energy norm) of the solution
     # on each level, coarse to fine
     estimated_error: List[float] = field(default_factory=list)
+    # adaptive tetrahedral hierarchies: the bisection state of the finest mesh's cells (the marks of
+    # _core.bisect), so that a further level continues the same bisection tree
+    bisection_marks: Optional[np.ndarray] = None
 
     @property
     def finest(self) -> Mesh:
@@ -138,21 +141,25 @@ class MeshHierarchy:
                  projector: Optional[Projector] = None, theta: float = 0.5, solve_options: Optional[dict] = None,
                  estimate_finest: bool = True, memory_fraction: float = 0.8,
                  progress: Optional[Callable[[int, "MeshHierarchy", object], None]] = None) -> "MeshHierarchy":
-        """Adaptive refinement of a triangle mesh to `levels` levels in all (level 1 is `mesh`): on
+        """Adaptive refinement of a simplicial mesh to `levels` levels in all (level 1 is `mesh`): on
         each level build the problem with `problem_factory(hierarchy)` (the hierarchy so far; the
         same description on every level), solve it (`problem.solve(**solve_options)`), estimate
         the error with the hierarchical estimator (contactmg.estimator), mark the cells of the
         bulk criterion with parameter `theta` and refine them by newest-vertex bisection with
-        conforming closure; new boundary nodes go through `projector`. The refinement edge of a
-        coarse cell is its longest edge (the coarse cells are rotated to put it first).
+        conforming closure; new boundary nodes go through `projector`. Triangles: the refinement
+        edge of a coarse cell is its longest edge (the coarse cells are rotated to put it first),
+        every edge of a marked cell is bisected. Tetrahedra: the marked bisection of Arnold,
+        Mukherjee and Pouly from the longest-edge marking of the coarse mesh, every marked cell
+        bisected 3 times (the mesh size halved there); the bisection state of the finest cells is
+        kept in `bisection_marks`.
         `estimated_error` holds the estimate of every level (the finest too, unless
         not estimate_finest). The result is nested like a uniform hierarchy: the same solvers run
-        on it. Adaptivity is for simplices: quadrilateral meshes raise ValueError."""
+        on it. Adaptivity is for simplices: quadrilateral and hexahedral meshes raise ValueError."""
         from .estimator import doerfler_mark, estimate
 
-        if mesh.cell_type != "triangle":
-            raise ValueError(f"adaptive refinement is for triangle meshes (newest-vertex bisection); got "
-                             f"{mesh.cell_type} cells: use MeshHierarchy.build for uniform refinement")
+        if mesh.cell_type not in ("triangle", "tetra"):
+            raise ValueError(f"adaptive refinement is for simplices (newest-vertex bisection of triangles and "
+                             f"tetrahedra); got {mesh.cell_type} cells: use MeshHierarchy.build for uniform refinement")
         if isinstance(levels, bool) or not isinstance(levels, (int, np.integer)):
             raise TypeError(f"levels must be an integer, got {type(levels).__name__}")
         if levels < 1:
@@ -163,15 +170,18 @@ class MeshHierarchy:
             raise TypeError("problem_factory must be a callable hierarchy -> ContactProblem")
         t0 = time.perf_counter()
         _core.check_cells(mesh.points, mesh.cells, mesh.cell_type)
-        coarse = Mesh._trusted(mesh.points, longest_edge_first(mesh.points, mesh.cells), mesh.cell_type,
-                               mesh.facets, mesh.facet_tags)
+        if mesh.cell_type == "triangle":
+            coarse = Mesh._trusted(mesh.points, longest_edge_first(mesh.points, mesh.cells), mesh.cell_type,
+                                   mesh.facets, mesh.facet_tags)
+        else:  # the core marks the coarse tetrahedra itself (bisection_marks None)
+            coarse = mesh
         h = cls([coarse], [], kind="adaptive")
         opts = dict(solve_options or {})
         for level in range(1, levels + 1):
             if level == levels and not estimate_finest:
                 break
             m = h.finest
-            need = 4 * m.num_points * _BYTES_PER_NODE[2]
+            need = (4 if m.dim == 2 else 8) * m.num_points * _BYTES_PER_NODE[m.dim]
             have = available_memory_bytes()
             if need > memory_fraction * have:
                 raise MemoryError(f"estimating level {level} needs about {need / 2**30:.1f} GiB, more than "
@@ -188,7 +198,12 @@ class MeshHierarchy:
             if level == levels:
                 break
             marked = doerfler_mark(est.cell_eta2, theta)
-            fine, t = _refined(m, _core.bisect(m.points, m.cells, m.facets, m.facet_tags, marked), projector)
+            if m.cell_type == "triangle":
+                r = _core.bisect(m.points, m.cells, m.facets, m.facet_tags, marked)
+            else:
+                r = _core.bisect(m.points, m.cells, m.facets, m.facet_tags, marked, marks=h.bisection_marks)
+                h.bisection_marks = r["marks"]
+            fine, t = _refined(m, r, projector)
             h.meshes.append(fine)
             h.transfers.append(t)
         h.build_seconds = time.perf_counter() - t0
@@ -199,7 +214,8 @@ class MeshHierarchy:
         if isinstance(levels, bool) or not isinstance(levels, (int, np.integer)) or not 1 <= levels <= self.levels:
             raise ValueError(f"levels must lie in 1..{self.levels}, got {levels!r}")
         return MeshHierarchy(self.meshes[:levels], self.transfers[:levels - 1], self.build_seconds, self.kind,
-                             self.estimated_error[:levels])
+                             self.estimated_error[:levels],
+                             self.bisection_marks if levels == self.levels else None)
 
     def new_nodes(self, level: int) -> np.ndarray:
         """Nodes that level `level` (an index into meshes; 0 is the coarse mesh) adds to the one below."""

@@ -29,22 +29,69 @@ def element_width(levels: int) -> float:
     return INNER * RADIUS / K / 2 ** (levels - 1)
 
 
+HIERARCHIES = ("uniform", "adaptive")
+# bulk parameter of the adaptive sphere hierarchy (Doerfler); with it a level adds about 2-3x the
+# nodes of the one below, refined towards the contact disc
+ADAPTIVE_THETA = 0.5
+
+
 def sphere_problem(cell: str = "hexahedron", levels: int = DEFAULT_LEVELS, friction: float = 0.4,
                    displacement: float = DISPLACEMENT, coulomb_at_zero: bool = False, cycle: str = "F",
-                   nu1: int = 3, nu2: int = 3, material: Material = None) -> ContactProblem:
+                   nu1: int = 3, nu2: int = 3, material: Material = None, hierarchy="uniform") -> ContactProblem:
     """The half ball (tetra or hexahedron cells) pushed by u = (0, 0, -displacement) on its top onto
-    z = 0, with Coulomb friction F (frictionless for F = 0 unless coulomb_at_zero)."""
-    if isinstance(friction, bool) or not isinstance(friction, (int, float)) or not math.isfinite(friction) or friction < 0:
-        raise ValueError(f"the friction coefficient must be a finite number >= 0, got {friction!r}")
-    if isinstance(displacement, bool) or not isinstance(displacement, (int, float)) or not math.isfinite(displacement) \
-            or not 0 < displacement < 0.25 * RADIUS:
-        raise ValueError(f"the displacement D must lie in (0, {0.25 * RADIUS}) (small deformations), got {displacement!r}")
-    mesh = half_ball(cell, CENTER, RADIUS, k=K, inner=INNER)
-    hierarchy = MeshHierarchy.build(mesh, levels, projector=ball_projector(CENTER, RADIUS))
+    z = 0, with Coulomb friction F (frictionless for F = 0 unless coulomb_at_zero). `hierarchy`:
+    "uniform" (refinement of the coarse mesh), "adaptive" (sphere_adaptive_hierarchy for this
+    friction; tetrahedra only) or a MeshHierarchy of the half ball."""
+    _check_friction(friction)
+    _check_displacement(displacement)
+    if isinstance(hierarchy, MeshHierarchy):
+        h = hierarchy
+    elif hierarchy == "uniform":
+        h = MeshHierarchy.build(half_ball(cell, CENTER, RADIUS, k=K, inner=INNER), levels,
+                                projector=ball_projector(CENTER, RADIUS))
+    elif hierarchy == "adaptive":
+        h = sphere_adaptive_hierarchy(levels, friction, displacement, cell=cell, material=material)
+    else:
+        raise ValueError(f"hierarchy must be one of {HIERARCHIES} or a MeshHierarchy, got {hierarchy!r}")
+    return sphere_problem_on(h, friction, displacement, coulomb_at_zero, cycle, nu1, nu2, material)
+
+
+def sphere_problem_on(hierarchy: MeshHierarchy, friction: float = 0.4, displacement: float = DISPLACEMENT,
+                      coulomb_at_zero: bool = False, cycle: str = "F", nu1: int = 3, nu2: int = 3,
+                      material: Material = None) -> ContactProblem:
+    """The sphere problem on a given hierarchy of the half ball."""
     law = Coulomb(friction) if (friction > 0 or coulomb_at_zero) else Frictionless()
     return ContactProblem(hierarchy, material or Material(E, NU), [Dirichlet([BALL_TOP], (0.0, 0.0, -displacement))],
                           contact_tags=[BALL_SURFACE], obstacle=PlaneObstacle((0.0, 0.0, 0.0), (0.0, 0.0, -1.0)),
                           friction=law, cycle=cycle, nu1=nu1, nu2=nu2)
+
+
+def sphere_adaptive_hierarchy(levels: int, friction: float = 0.4, displacement: float = DISPLACEMENT,
+                              theta: float = ADAPTIVE_THETA, cell: str = "tetra", material: Material = None,
+                              coarse=None, progress=None) -> MeshHierarchy:
+    """The adaptive sphere hierarchy: the coarse tetrahedral half ball refined by the hierarchical
+    estimator of the sphere problem with friction F, bulk marking with `theta` and newest-vertex
+    bisection of tetrahedra (MeshHierarchy.adaptive); new nodes on the ball's surface projected onto
+    the sphere. Adaptivity is for simplices: cell must be "tetra"."""
+    if cell != "tetra":
+        raise ValueError(f"the adaptive hierarchy is for simplices (bisection of tetrahedra): use cell 'tetra', "
+                         f"got {cell!r}")
+    _check_friction(friction)
+    _check_displacement(displacement)
+    mesh = half_ball("tetra", CENTER, RADIUS, k=K, inner=INNER) if coarse is None else coarse
+    return MeshHierarchy.adaptive(mesh, levels, lambda h: sphere_problem_on(h, friction, displacement, material=material),
+                                  projector=ball_projector(CENTER, RADIUS), theta=theta, progress=progress)
+
+
+def _check_friction(friction):
+    if isinstance(friction, bool) or not isinstance(friction, (int, float)) or not math.isfinite(friction) or friction < 0:
+        raise ValueError(f"the friction coefficient must be a finite number >= 0, got {friction!r}")
+
+
+def _check_displacement(displacement):
+    if isinstance(displacement, bool) or not isinstance(displacement, (int, float)) or not math.isfinite(displacement) \
+            or not 0 < displacement < 0.25 * RADIUS:
+        raise ValueError(f"the displacement D must lie in (0, {0.25 * RADIUS}) (small deformations), got {displacement!r}")
 
 
 def contact_modulus(material: Material = Material(E, NU)) -> float:
