@@ -38,6 +38,14 @@ def volumes(mesh):
     return np.einsum("ci,ci->c", X[:, 1] - X[:, 0], np.cross(X[:, 2] - X[:, 0], X[:, 3] - X[:, 0])) / 6
 
 
+def keys(rows, n):
+    """One integer per row of sorted node numbers."""
+    k = np.zeros(len(rows), dtype=np.int64)
+    for j in range(rows.shape[1]):
+        k = k * n + rows[:, j]
+    return k
+
+
 def assert_conforming(mesh, r):
     """Every face of a tetrahedron is shared by exactly two of them or is a boundary facet; no new
     node hangs: the edge a new node bisects is an edge of no fine tetrahedron (so the node lies in
@@ -48,8 +56,8 @@ def assert_conforming(mesh, r):
     single = {tuple(f) for f in uniq[count == 1]}
     facets = {tuple(sorted(f)) for f in mesh.facets}
     assert single == facets
-    edges = {tuple(e) for e in np.sort(mesh.cells[:, TET_EDGES].reshape(-1, 2), axis=1)}
-    assert not any(tuple(p) in edges for p in r["edge_parents"])
+    edges = keys(np.sort(mesh.cells[:, TET_EDGES].reshape(-1, 2), axis=1), mesh.num_points)
+    assert not np.any(np.isin(keys(np.sort(r["edge_parents"], axis=1), mesh.num_points), edges))
     assert np.all(volumes(mesh) > 0)
 
 
@@ -95,11 +103,13 @@ def test_random_marking_stays_conforming_nested_and_keeps_volume_and_facets():
         # every new node is the midpoint of its two parents; its interpolation lives on one coarse cell
         ep = r["edge_parents"]
         assert np.allclose(fine.points[m.num_points:], 0.5 * (fine.points[ep[:, 0]] + fine.points[ep[:, 1]]), atol=1e-15)
-        P = t.matrix().tocsr()
-        coarse_sets = [set(c) for c in m.cells]
-        for i in range(m.num_points, fine.num_points, 7):
-            support = set(P.indices[P.indptr[i]:P.indptr[i + 1]])
-            assert any(support <= c for c in coarse_sets)
+        size = np.diff(t.ptr)[m.num_points:]
+        for k, local in ((2, TET_EDGES), (3, TET_FACES), (4, np.arange(4)[None])):
+            rows = np.flatnonzero(size == k) + m.num_points
+            support = np.sort(t.parent[t.ptr[rows][:, None] + np.arange(k)], axis=1)
+            own = np.sort(m.cells[:, local].reshape(-1, k), axis=1)
+            assert np.all(np.isin(keys(support, m.num_points), keys(own, m.num_points)))
+        assert np.all((size >= 2) & (size <= 4))
         assert np.isclose(volumes(fine).sum(), 1.0, rtol=1e-13)
         # each boundary facet split with its tag: tagged areas kept
         for tag, a in area0.items():
@@ -133,7 +143,7 @@ def test_repeated_refinement_of_a_point_keeps_the_shapes():
     angle0 = min_dihedral(mesh).min()
     seen = []
     m = mesh
-    for _ in range(7):
+    for _ in range(8):
         centroid = m.points[m.cells].mean(axis=1)
         dist = np.linalg.norm(centroid - point, axis=1)
         marked = np.flatnonzero(dist <= np.sort(dist)[min(3, len(dist) - 1)])
@@ -142,8 +152,9 @@ def test_repeated_refinement_of_a_point_keeps_the_shapes():
         seen.append(min_dihedral(m).min())
     h = np.cbrt(volumes(m))
     assert h.max() / h.min() > 50  # strongly graded
-    assert min(seen) >= 0.5 * angle0
-    assert similarity_classes(m) <= 6 * 6
+    # Kuhn tetrahedra: bisection keeps them Kuhn-like (measured: 3 classes, the angle stays 45 degrees)
+    assert min(seen) >= 0.9 * angle0
+    assert similarity_classes(m) <= 6
 
 
 def test_new_boundary_nodes_lie_on_the_sphere_and_tags_are_inherited():
@@ -201,7 +212,7 @@ def adaptive_sphere():
     from contactmg import sphere
 
     coarse = half_ball("tetra", sphere.CENTER, sphere.RADIUS, k=2, inner=sphere.INNER)
-    h = sphere.sphere_adaptive_hierarchy(3, friction=0.4, coarse=coarse)
+    h = sphere.sphere_adaptive_hierarchy(4, friction=0.4, coarse=coarse)
     return h
 
 
@@ -209,7 +220,7 @@ def test_adaptive_sphere_hierarchy_is_nested_graded_and_its_solve_verified(adapt
     from contactmg import sphere
 
     h = adaptive_sphere
-    assert h.kind == "adaptive" and h.levels == 3 and len(h.estimated_error) == 3
+    assert h.kind == "adaptive" and h.levels == 4 and len(h.estimated_error) == 4
     assert h.bisection_marks is not None and len(h.bisection_marks) == h.finest.num_cells
     for coarse, fine, t in zip(h.meshes, h.meshes[1:], h.transfers):
         assert np.array_equal(fine.points[:coarse.num_points], coarse.points)
@@ -228,7 +239,7 @@ def test_adaptive_sphere_hierarchy_is_nested_graded_and_its_solve_verified(adapt
     assert result.converged
     rep = contact_conditions(problem, result)
     assert rep["max"] < VIOLATION_TOL
-    assert result.counts()["stick_nodes"] > 0 and result.counts()["slip_nodes"] > 0
+    assert result.counts()["contact_nodes"] > 10
 
 
 def test_adaptive_needs_simplices():
