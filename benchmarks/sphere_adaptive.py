@@ -7,10 +7,10 @@ Per level of the adaptive hierarchy (sphere_adaptive_hierarchy: hierarchical est
 marking, AMP bisection of tetrahedra, refined for F = 0.4) and of the uniform one (Bey's red
 refinement): dofs, the estimated error (adaptive), Algorithm 2 cycles for each friction coefficient
 (tol 1e-11, every result checked by contactmg.checks.contact_conditions), and for the
-frictionless solve the accuracy: the load P (for this displacement-driven problem the energy is
-P D / 2, and P_h decreases to P under nested refinement: (P_h - P_ref) / P_ref is the energy
-error, reference: one adaptive level beyond the last compared), the contact radius against
-Hertz's a and the central pressure against p0 for the computed load.
+frictionless solve the accuracy: the contact radius against Hertz's a and the central pressure
+against p0 for the computed load P. (P itself is printed but is no error measure across the two
+kinds: the energy is P D / 2, but the hierarchies resolve the sphere's surface differently away from
+the contact, so their domains differ.)
 """
 import argparse
 import json
@@ -45,7 +45,7 @@ def solve_row(kind, level, h, frictions):
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--levels", type=int, default=4, help="adaptive levels (one more is built as the reference)")
+    ap.add_argument("--levels", type=int, default=5, help="adaptive levels")
     ap.add_argument("--uniform-levels", type=int, default=3)
     ap.add_argument("--frictions", type=float, nargs="+", default=[0.0, 0.4, 2.0])
     ap.add_argument("--theta", type=float, default=sphere.ADAPTIVE_THETA)
@@ -53,33 +53,29 @@ def main(argv=None):
     a = ap.parse_args(argv)
     frictions = sorted(set(a.frictions) | {0.0})
     t0 = time.perf_counter()
-    full = sphere.sphere_adaptive_hierarchy(a.levels + 1, friction=0.4, theta=a.theta,
+    full = sphere.sphere_adaptive_hierarchy(a.levels, friction=0.4, theta=a.theta,
                                             progress=lambda l, h, r: print(f"  adaptive level {l}: {3 * h.finest.num_points} dofs, "
                                                                            f"{time.perf_counter() - t0:.0f} s", file=sys.stderr))
     rows = []
     for L in range(1, a.levels + 1):
         rows.append(solve_row("adaptive", L, full.truncated(L), frictions))
         rows[-1]["estimated_error"] = full.estimated_error[L - 1]
-    ref = solve_row("reference", a.levels + 1, full, [0.0])
     uni = MeshHierarchy.build(half_ball("tetra", sphere.CENTER, sphere.RADIUS, k=sphere.K, inner=sphere.INNER),
                               a.uniform_levels, projector=ball_projector(sphere.CENTER, sphere.RADIUS))
     for L in range(1, a.uniform_levels + 1):
         rows.append(solve_row("uniform", L, uni.truncated(L), frictions))
-    P = ref["load"]
     head = f"{'kind':>9} {'lvl':>3} {'dofs':>8} {'est err':>9} " + " ".join(f"{'F=' + str(F):>6}" for F in frictions) + \
-        f" {'(P-Pref)/Pref':>13} {'a/a_H-1':>8} {'p0/p0_H-1':>9}"
+        f" {'P':>8} {'a/a_H-1':>8} {'p0/p0_H-1':>9}"
     print(head)
     for r in rows:
-        r["energy_error"] = (r["load"] - P) / P
         cyc = " ".join(f"{str(r['cycles'][str(F)]):>6}" for F in frictions)
         est = f"{r['estimated_error']:.3e}" if "estimated_error" in r else "-"
-        print(f"{r['kind']:>9} {r['level']:>3} {r['dofs']:>8} {est:>9} {cyc} {r['energy_error']:>13.3e} "
+        print(f"{r['kind']:>9} {r['level']:>3} {r['dofs']:>8} {est:>9} {cyc} {r['load']:>8.4f} "
               f"{r['contact_radius'] / r['hertz_radius'] - 1:>+8.3f} {r['central_pressure'] / r['hertz_p0'] - 1:>+9.3f}")
-    print(f"reference: adaptive level {ref['level']}, {ref['dofs']} dofs, P = {P:.6g}; max violation "
-          f"{max(max(r['violation'].values()) for r in rows):.1e}; {time.perf_counter() - t0:.0f} s in all")
+    print(f"max violation {max(max(r['violation'].values()) for r in rows):.1e}; {time.perf_counter() - t0:.0f} s in all")
     os.makedirs(a.out, exist_ok=True)
     with open(os.path.join(a.out, "sphere_adaptive.json"), "w") as fh:
-        json.dump({"rows": rows, "reference": ref, "theta": a.theta}, fh, indent=1)
+        json.dump({"rows": rows, "theta": a.theta}, fh, indent=1)
 
 
 if __name__ == "__main__":

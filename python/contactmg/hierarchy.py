@@ -158,8 +158,9 @@ class MeshHierarchy:
         from .estimator import doerfler_mark, estimate
 
         if mesh.cell_type not in ("triangle", "tetra"):
-            raise ValueError(f"adaptive refinement is for simplices (newest-vertex bisection of triangles and "
-                             f"tetrahedra); got {mesh.cell_type} cells: use MeshHierarchy.build for uniform refinement")
+            raise ValueError(f"adaptive refinement is for triangle meshes and tetrahedral meshes (simplices: "
+                             f"newest-vertex bisection); got {mesh.cell_type} cells: use MeshHierarchy.build for "
+                             f"uniform refinement")
         if isinstance(levels, bool) or not isinstance(levels, (int, np.integer)):
             raise TypeError(f"levels must be an integer, got {type(levels).__name__}")
         if levels < 1:
