@@ -119,6 +119,18 @@ def test_random_marking_stays_conforming_nested_and_keeps_volume_and_facets():
         m, marks = fine, r["marks"]
 
 
+def test_one_generation_bisects_each_marked_cell_once_and_closes():
+    rng = np.random.default_rng(5)
+    m, marks = distorted_box(1, seed=4), None
+    for _ in range(5):
+        marked = np.flatnonzero(rng.random(m.num_cells) < 0.3)
+        fine, t, r = bisect(m, marked, marks, generations=1)
+        assert_conforming(fine, r)
+        assert fine.num_cells >= m.num_cells + len(marked)
+        assert np.isclose(volumes(fine).sum(), 1.0, rtol=1e-13)
+        m, marks = fine, r["marks"]
+
+
 def test_marking_every_cell_three_times_splits_every_edge_once():
     """Three generations of bisection of all cells put a node on every edge and nowhere else, and
     give 8 children per cell: the node count of red refinement, for the Kuhn box and the ball."""
