@@ -5,7 +5,8 @@
 
 Per level of the adaptive hierarchy (sphere_adaptive_hierarchy: hierarchical estimator, Doerfler
 marking, AMP bisection of tetrahedra, refined for F = 0.4) and of the uniform one (Bey's red
-refinement): dofs, the estimated error (adaptive), Algorithm 2 cycles for each friction coefficient
+refinement): dofs, the estimated error (F = 0.4; the same estimator on the uniform levels up to
+--estimate-dofs), Algorithm 2 cycles for each friction coefficient
 (tol 1e-11, every result checked by contactmg.checks.contact_conditions), and for the
 frictionless solve the accuracy: the contact radius against Hertz's a and the central pressure
 against p0 for the computed load P. (P itself is printed but is no error measure across the two
@@ -22,11 +23,12 @@ import numpy as np
 
 from contactmg import sphere
 from contactmg.checks import contact_conditions
+from contactmg.estimator import estimate
 from contactmg.hierarchy import MeshHierarchy
 from contactmg.generators_3d import ball_projector, half_ball
 
 
-def solve_row(kind, level, h, frictions):
+def solve_row(kind, level, h, frictions, estimate_dofs=0):
     row = {"kind": kind, "level": level, "dofs": int(3 * h.finest.num_points), "cycles": {}}
     for F in frictions:
         p = sphere.sphere_problem_on(h, friction=F)
@@ -36,6 +38,11 @@ def solve_row(kind, level, h, frictions):
         row["cycles"][str(F)] = r.cycles if r.converged else None
         row.setdefault("violation", {})[str(F)] = viol
         row.setdefault("seconds", {})[str(F)] = time.perf_counter() - t0
+        if kind == "uniform" and F == 0.4 and row["dofs"] <= estimate_dofs:
+            # the same hierarchical estimator on the uniform level: a like-for-like error measure
+            est = estimate(h, lambda hh: sphere.sphere_problem_on(hh, friction=F), r,
+                           ball_projector(sphere.CENTER, sphere.RADIUS))
+            row["estimated_error"] = est.total
         if F == 0:
             load = float(r.reaction[2])
             row.update(load=load, contact_radius=sphere.radius_of(r, (1, 2)), hertz_radius=sphere.hertz_radius(load),
@@ -49,6 +56,8 @@ def main(argv=None):
     ap.add_argument("--uniform-levels", type=int, default=3)
     ap.add_argument("--frictions", type=float, nargs="+", default=[0.0, 0.4, 2.0])
     ap.add_argument("--theta", type=float, default=sphere.ADAPTIVE_THETA)
+    ap.add_argument("--estimate-dofs", type=int, default=20000,
+                    help="estimate the uniform levels (F = 0.4) up to this many dofs (the estimate refines once more)")
     ap.add_argument("--out", default="out")
     a = ap.parse_args(argv)
     frictions = sorted(set(a.frictions) | {0.0})
@@ -63,7 +72,7 @@ def main(argv=None):
     uni = MeshHierarchy.build(half_ball("tetra", sphere.CENTER, sphere.RADIUS, k=sphere.K, inner=sphere.INNER),
                               a.uniform_levels, projector=ball_projector(sphere.CENTER, sphere.RADIUS))
     for L in range(1, a.uniform_levels + 1):
-        rows.append(solve_row("uniform", L, uni.truncated(L), frictions))
+        rows.append(solve_row("uniform", L, uni.truncated(L), frictions, a.estimate_dofs))
     head = f"{'kind':>9} {'lvl':>3} {'dofs':>8} {'est err':>9} " + " ".join(f"{'F=' + str(F):>6}" for F in frictions) + \
         f" {'P':>8} {'a/a_H-1':>8} {'p0/p0_H-1':>9}"
     print(head)
