@@ -102,9 +102,13 @@ def run_sphere(args) -> int:
     if args.hierarchy == "adaptive" and args.cell != "tetra":
         raise ValueError(f"--hierarchy adaptive is for simplices (bisection of tetrahedra): use --cell tetra, "
                          f"not {args.cell}")
-    problem = sphere.sphere_problem(args.cell, args.levels, args.friction, args.displacement,
-                                    coulomb_at_zero=args.method == "fixed-point", cycle=args.cycle, nu1=args.nu1,
-                                    nu2=args.nu2, hierarchy=args.hierarchy)
+    try:
+        problem = sphere.sphere_problem(args.cell, args.levels, args.friction, args.displacement,
+                                        coulomb_at_zero=args.method == "fixed-point", cycle=args.cycle, nu1=args.nu1,
+                                        nu2=args.nu2, hierarchy=args.hierarchy)
+    except RuntimeError as e:  # a solve of the adaptive refinement did not converge: no result to report
+        print(f"contactmg sphere: {e}", file=sys.stderr)
+        return cli.EXIT_NO_CONVERGENCE
     path = None
     if cli_path.wanted(args):
         path = cli_path.solve(args, problem, [BALL_TOP], (0.0, 0.0, -args.displacement), (args.shear or 0.0, 0.0, 0.0),
