@@ -91,7 +91,7 @@ def test_random_marking_stays_conforming_nested_and_keeps_volume_and_facets():
     marks = None
     G = np.array([[0.3, -1.1, 0.2], [0.7, 0.4, -0.5], [0.1, 0.0, 2.0]])
     area0 = {t: m.facet_measures()[m.facet_tags == t].sum() for t in range(1, 7)}
-    for level in range(4):
+    for level in range(3):
         marked = np.flatnonzero(rng.random(m.num_cells) < 0.15)
         fine, t, r = bisect(m, marked, marks)
         assert_conforming(fine, r)
@@ -277,6 +277,34 @@ def test_adaptive_sphere_hierarchy_is_nested_graded_and_its_solve_verified(adapt
     rep = contact_conditions(problem, result)
     assert rep["max"] < VIOLATION_TOL
     assert result.counts()["contact_nodes"] > 10
+
+
+def test_estimator_tracks_the_energy_error_in_3d(adaptive_sphere):
+    """Efficiency and reliability proxy in 3D: estimate / energy error against a reference (the
+    finest adaptive level refined once more, red; coarser solutions prolongated through the nested
+    hierarchy) stays in a band while the error falls by 4 (measured: 0.73, 1.17, 0.93, 0.93)."""
+    from contactmg import sphere
+
+    h = adaptive_sphere
+    m = h.finest
+    f, t = _refined(m, _core.refine(m.points, m.cells, "tetra", m.facets, m.facet_tags),
+                    ball_projector(sphere.CENTER, sphere.RADIUS))
+    href = MeshHierarchy(list(h.meshes) + [f], list(h.transfers) + [t])
+    pref = sphere.sphere_problem_on(href, 0.4)
+    rref = pref.solve()
+    assert rref.converged
+    ratios, errors = [], []
+    for level in range(h.levels):
+        r = sphere.sphere_problem_on(h.truncated(level + 1), 0.4).solve(max_cycles=sphere.ADAPTIVE_MAX_CYCLES)
+        assert r.converged
+        u = r.displacement
+        for tt in href.transfers[level:]:
+            u = tt.matrix() @ u
+        e = u - rref.displacement
+        errors.append(np.sqrt(np.sum(e * pref.A.matvec(e))))
+        ratios.append(h.estimated_error[level] / errors[-1])
+    assert errors[-1] < errors[0] / 3
+    assert 0.5 < min(ratios) and max(ratios) < 2.0
 
 
 def test_adaptive_needs_simplices():
