@@ -15,7 +15,8 @@ Hierarchies (Hertz, Coulomb F = 0.4, solved from zero to tol 1e-11):
 For each, with full smoothing (every row of every coarse level) and with local smoothing
 (ContactProblem.local_smoothing: the rows of MeshHierarchy.changed_nodes on coarse levels 1..L-2):
 cycles, the fastest seconds per cycle of --repeat solves, microseconds per cycle and dof, and
-the smoothed rows per cycle counted from the cycle's visits of each level (load-independent:
+CPU microseconds per cycle and dof (process time of the fastest solve, one
+thread: less sensitive to a loaded machine than the wall clock), and the smoothed rows per cycle counted from the cycle's visits of each level (load-independent:
 "rows/dof" = smoothed block rows per cycle / fine nodes; nu1 + nu2 sweeps each).
 """
 import argparse
@@ -46,9 +47,12 @@ def measure(name, h, local, cycle, repeat, friction=0.4):
     p = hertz.hertz_problem_on(h, friction, cycle=cycle)
     p.local_smoothing = local
     p.solver  # built outside the timing
-    best = None
+    best, cpu = None, None
     for _ in range(repeat):
-        r = p.solve()
+        c0 = time.process_time()
+        r = p.solve(threads=1)
+        c = time.process_time() - c0
+        cpu = c if cpu is None else min(cpu, c)
         best = r if best is None or r.solve_seconds < best.solve_seconds else best
     n = p.mesh.num_points
     vis = visits(h.levels, cycle)
@@ -58,6 +62,7 @@ def measure(name, h, local, cycle, repeat, friction=0.4):
     return {"hierarchy": name, "local": bool(local), "levels": h.levels, "dofs": 2 * n, "cycles": best.cycles,
             "converged": best.converged, "seconds_per_cycle": best.solve_seconds / best.cycles,
             "us_per_cycle_per_dof": 1e6 * best.solve_seconds / best.cycles / (2 * n),
+            "cpu_us_per_cycle_per_dof": 1e6 * cpu / best.cycles / (2 * n),
             "smoothed_rows_per_fine_node": smoothed / n,
             "coarse_rows_per_fine_node": sum(m.num_points for m in h.meshes[:-1]) / n}
 
@@ -91,7 +96,7 @@ def main():
                                                            projector=hertz_projector(hertz.CENTER, hertz.RADIUS))))
     rows = []
     head = (f"{'hierarchy':>12} {'smoothing':>9} {'levels':>6} {'dofs':>8} {'cycles':>6} {'s/cycle':>8} "
-            f"{'us/cyc/dof':>10} {'rows/dof':>8} {'coarse/fine':>11}")
+            f"{'us/cyc/dof':>10} {'cpu us':>7} {'rows/dof':>8} {'coarse/fine':>11}")
     print(f"cycle {a.cycle}(3,3), Coulomb F = 0.4; load average {os.getloadavg()[0]:.1f} at the start")
     print(head)
     for name, h in cases:
@@ -99,7 +104,7 @@ def main():
             r = measure(name, h, local, a.cycle, a.repeat)
             rows.append(r)
             print(f"{name:>12} {'local' if local else 'full':>9} {r['levels']:6d} {r['dofs']:8,} {r['cycles']:6d} "
-                  f"{r['seconds_per_cycle']:8.4f} {r['us_per_cycle_per_dof']:10.3f} "
+                  f"{r['seconds_per_cycle']:8.4f} {r['us_per_cycle_per_dof']:10.3f} {r['cpu_us_per_cycle_per_dof']:7.3f} "
                   f"{r['smoothed_rows_per_fine_node']:8.2f} {r['coarse_rows_per_fine_node']:11.2f}", flush=True)
     print(f"load average {os.getloadavg()[0]:.1f} at the end")
     with open(os.path.join(a.out, "local_multigrid_cost.json"), "w") as fh:
