@@ -16,13 +16,17 @@ setup:
 	$(PIP) "scikit-build-core>=0.10" "pybind11>=2.12" numpy
 	$(PIP) --no-build-isolation -e ".[test]"
 
+# table1: the paper's adaptive hierarchy, levels 3 5 7 9 11 (464,670 dofs), both algorithms for the ten
+# coefficients in two processes; exit status 3 (runs that did not converge, reported) does not stop the demo.
 demo: setup
 	mkdir -p $(OUT)
+	@date +%s > $(OUT)/.demo_start
 	$(PYTHON) -m contactmg hertz --levels $(LEVELS) --friction $(FRICTION) \
 	  --json $(OUT)/hertz.json --vtu $(OUT)/hertz.vtu --plot $(OUT)/hertz_stress.png
-	$(PYTHON) -m contactmg table1 --json $(OUT)/table1.json --plot $(OUT)/table1.png
+	$(PYTHON) -m contactmg table1 --json $(OUT)/table1.json --plot $(OUT)/table1.png; \
+	  s=$$?; if [ $$s -ne 0 ] && [ $$s -ne 3 ]; then exit $$s; fi
 	@echo "wrote $(OUT)/hertz.json $(OUT)/hertz.vtu $(OUT)/hertz_stress.png (Figure 2 middle)" \
-	  "$(OUT)/table1.json $(OUT)/table1.png (Table 1, Figure 1)"
+	  "$(OUT)/table1.json $(OUT)/table1.png (adaptive Table 1, Figure 1) in $$(( $$(date +%s) - $$(cat $(OUT)/.demo_start) )) s"
 
 test: setup
 	$(PYTHON) -m pytest -q

@@ -25,7 +25,7 @@ import numpy as np
 
 from contactmg import _core, hertz
 from contactmg.hierarchy import MeshHierarchy, _refined
-from contactmg.table1 import failed_runs, format_table, merge_levels, table1
+from contactmg.table1 import FIXED_POINT_STALL_WINDOW, failed_runs, format_table, merge_levels, table1
 
 
 def energy(problem, v):
@@ -163,7 +163,8 @@ def part_table(a, out):
                   f"{2 * h.meshes[L - 1].num_points / d:.2f})")
     tab = None
     for L in a.levels:  # one level at a time, saved after each (level 11 takes minutes per coefficient)
-        row = table1([L], a.frictions, hierarchy=h, progress=False, fixed_point_max=a.fixed_point_max)
+        row = table1([L], a.frictions, hierarchy=h, progress=False, fixed_point_max=a.fixed_point_max, jobs=a.jobs,
+                     fixed_point_stall_window=a.fixed_point_stall_window)
         tab = row if tab is None else merge_levels(tab, row)
         tab["estimated_error"] = [float(h.estimated_error[k - 1]) for k in tab["levels"]]
         tab["paper_dofs"] = [hertz.PAPER_ADAPTIVE_DOFS.get(k) for k in tab["levels"]]
@@ -188,6 +189,10 @@ def main():
     ap.add_argument("--cost-uniform", type=int, nargs="+", default=[5, 6, 7, 8])
     ap.add_argument("--repeat", type=int, default=2)
     ap.add_argument("--fixed-point-max", type=int, default=100, help="outer iterations of Algorithm 1 before 'no conv.'")
+    ap.add_argument("--fixed-point-stall-window", type=int, default=FIXED_POINT_STALL_WINDOW,
+                    help="Algorithm 1 stops as not converging when its change of s_n did not fall over this many outer "
+                         "iterations (0: off)")
+    ap.add_argument("--jobs", type=int, default=2, help="worker processes of the table")
     ap.add_argument("--out", default="out")
     ap.add_argument("--tag", default="", help="suffix of the JSON file name (runs split over processes)")
     ap.add_argument("--no-plot", dest="plot", action="store_false")

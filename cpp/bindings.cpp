@@ -120,6 +120,7 @@ py::dict result_to_dict(const SolveResult& R, const ContactSolver<d>& S) {
   hist["seconds"] = sec; hist["error"] = err; hist["active"] = act; hist["stick"] = st; hist["slip"] = sl; hist["rebuilt"] = rb;
   hist["step_size"] = step; hist["frozen_decrease"] = fdec;
   out["history"] = hist;
+  out["outer_changes"] = to_numpy(R.outer_changes, {(py::ssize_t)R.outer_changes.size()});
   out["converged"] = R.converged;
   out["status"] = R.status;
   out["cycles"] = R.cycles;
@@ -245,8 +246,10 @@ void bind_dim(py::module_& m) {
            "in its free directions); frame_fixed/frame_values (nc, d): components fixed in the contact frames")
       .def("solve", [](CS& S, py::object u0, double tol, double rtol, int max_cycles, bool fixed_point, double fp_tol,
                        int fp_max, py::object reference, py::object cycle, py::object nu1, py::object nu2, py::object progress,
-                       bool tnnmg, py::object ordering, int threads) {
+                       bool tnnmg, py::object ordering, int threads, int fp_stall) {
              SolveOptions o;
+             if (fp_stall < 0) throw InputError("fixed_point_stall_window must be >= 0 (0: off)");
+             o.fixed_point_stall_window = fp_stall;
              o.tol = tol; o.rtol = rtol; o.max_cycles = max_cycles; o.fixed_point_tol = fp_tol; o.fixed_point_max = fp_max;
              if (!(tol >= 0) || !(rtol >= 0) || !(tol > 0 || rtol > 0)) throw InputError("tolerances must be >= 0, one of them > 0");
              if (max_cycles < 1) throw InputError("max_cycles must be at least 1");
@@ -302,7 +305,7 @@ void bind_dim(py::module_& m) {
            py::arg("fixed_point") = false, py::arg("fixed_point_tol") = 1e-9, py::arg("fixed_point_max") = 100,
            py::arg("reference") = py::none(), py::arg("cycle") = py::none(), py::arg("nu1") = py::none(),
            py::arg("nu2") = py::none(), py::arg("progress") = py::none(), py::arg("tnnmg") = false,
-           py::arg("ordering") = py::none(), py::arg("threads") = 0,
+           py::arg("ordering") = py::none(), py::arg("threads") = 0, py::arg("fixed_point_stall_window") = 0,
            "tnnmg: truncated nonsmooth Newton multigrid steps instead of monotone multigrid cycles; "
            "cycle, nu1, nu2, ordering override the constructor's for this solve; threads: 0 = all cores (the result "
            "does not depend on it); progress(record: dict) is called after every "

@@ -12,6 +12,11 @@ struct SolveOptions {
   int max_cycles = 200;  // per solve (per Tresca solve inside the fixed point)
   double fixed_point_tol = 1e-9;
   int fixed_point_max = 100;
+  // Algorithm 1 stops as not converging when its relative change of s_n has not fallen below the
+  // one of `fixed_point_stall_window` outer iterations before (0: never; it runs to fixed_point_max).
+  // A contraction lowers the change every iteration; one that does not fall over several
+  // iterations is the paper's "no conv." (large F, small h), found without running to the cap.
+  int fixed_point_stall_window = 0;
   double divergence_factor = 1e8;  // a correction this much larger than the first one: diverged
   const double* reference = nullptr;  // canonical u*: record ||u - u*||_A per cycle (costs a matvec)
 };
@@ -41,6 +46,7 @@ struct SolveResult {
   std::vector<double> friction_bound;  // the bound s of each contact node at the end
   std::vector<std::int8_t> state;      // contact nodes: 0 free, 1 stick, 2 slip
   std::vector<CycleRecord> history;
+  std::vector<double> outer_changes;   // Algorithm 1: |s_n(u^k) - s_n(u^{k-1})| / |s_n(u^k)| per outer iteration
   bool converged = false;
   std::string status;
   int cycles = 0, outer_iterations = 0, rebuilds = 0;

@@ -33,6 +33,7 @@ class FixedPointStep {
     return true;
   }
   bool fixed(double tol) const { return change_ <= tol * norm_; }
+  double relative_change() const { return norm_ > 0 ? change_ / norm_ : change_; }
 
  private:
   // s_n = (A u - f)_n at the contact nodes, from the tracked A u
@@ -55,9 +56,18 @@ template <int d>
 void run_fixed_point(FixedPointStep<d>& step, const SolveOptions& opt, Monitor& mon, SolveResult& R) {
   for (int k = 1; k <= opt.fixed_point_max; ++k) {
     if (!step.iterate(k, opt, mon, R)) return;
+    R.outer_changes.push_back(step.relative_change());
     if (step.fixed(opt.fixed_point_tol)) {
       R.converged = true;
       R.status = "converged";
+      return;
+    }
+    const int w = opt.fixed_point_stall_window;
+    if (w > 0 && k > w && R.outer_changes[k - 1] >= R.outer_changes[k - 1 - w]) {
+      R.converged = false;
+      R.status = "no convergence of the fixed-point iteration: the relative change of s_n (" +
+                 fmt3(R.outer_changes[k - 1]) + " at outer iteration " + std::to_string(k) + ") did not fall below " +
+                 "the one of " + std::to_string(w) + " iterations before (" + fmt3(R.outer_changes[k - 1 - w]) + ")";
       return;
     }
   }

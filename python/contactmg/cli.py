@@ -140,7 +140,10 @@ def _parser() -> argparse.ArgumentParser:
     t.add_argument("--levels", type=_positive_int("--levels", 1, MAX_LEVELS), nargs="+", default=None)
     t.add_argument("--frictions", type=_nonneg_float("--frictions", positive=True), nargs="+", default=None)
     t.add_argument("--cell", choices=["triangle", "quad"], default="triangle")
-    t.add_argument("--hierarchy", choices=["uniform", "adaptive"], default="uniform")
+    t.add_argument("--hierarchy", choices=["uniform", "adaptive"], default=None,
+                   help="adaptive (default for triangles, levels 3 5 7 9 11) or uniform (levels 2-8)")
+    t.add_argument("--jobs", type=_positive_int("--jobs", 1, 64), default=min(2, os.cpu_count() or 1),
+                   help="worker processes for the runs (default: 2 or the cores, if fewer)")
     t.add_argument("--json", type=_writable, metavar="PATH|-")
     t.add_argument("--plot", type=_with_suffix("--plot", PLOT_SUFFIXES), metavar="PATH")
     t.add_argument("-q", "--quiet", action="store_true")

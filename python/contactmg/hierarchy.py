@@ -218,6 +218,30 @@ class MeshHierarchy:
                              self.estimated_error[:levels],
                              self.bisection_marks if levels == self.levels else None)
 
+    def thinned(self, min_growth: float = 2.0) -> "MeshHierarchy":
+        """The same finest and coarsest meshes with the levels in between kept only where the
+        node count has grown by at least `min_growth` since the last kept level (transfers
+        composed: still nested, the fine nodes interpolated from the kept coarse ones). A strongly
+        graded hierarchy (small Doerfler theta, growth 1.2-1.5 per level) becomes one with
+        geometric growth, so that a cycle over it costs O(n_L) even with full smoothing."""
+        if isinstance(min_growth, bool) or not isinstance(min_growth, (int, float)) or not min_growth >= 1:
+            raise ValueError(f"min_growth must be a number >= 1, got {min_growth!r}")
+        keep = [0]
+        for k in range(1, self.levels):
+            if k == self.levels - 1 or self.meshes[k].num_points >= min_growth * self.meshes[keep[-1]].num_points:
+                keep.append(k)
+        transfers = []
+        for a, b in zip(keep[:-1], keep[1:]):
+            P = self.transfers[a].matrix()
+            for t in self.transfers[a + 1:b]:
+                P = t.matrix() @ P
+            P = P.tocsr()
+            P.sort_indices()
+            transfers.append(Transfer(P.shape[0], P.shape[1], P.indptr.astype(np.int64), P.indices.astype(np.int64),
+                                      P.data.astype(float)))
+        est = [self.estimated_error[k] for k in keep if k < len(self.estimated_error)]
+        return MeshHierarchy([self.meshes[k] for k in keep], transfers, self.build_seconds, self.kind, est)
+
     def new_nodes(self, level: int) -> np.ndarray:
         """Nodes that level `level` (an index into meshes; 0 is the coarse mesh) adds to the one below."""
         self._check_level(level)

@@ -28,6 +28,8 @@ INT32_MAX = 2 ** 31 - 1  # the core counts cycles in a C int
 SOLVE_TAKES_CYCLE_OPTIONS = "progress" in (_core.ContactSolver2D.solve.__doc__ or "")
 # Issue 15: threads= and ordering= per solve (coloured Gauss-Seidel sweeps).
 SOLVE_TAKES_THREADS = "threads" in (_core.ContactSolver2D.solve.__doc__ or "")
+# Algorithm 1's stop when it does not contract (issue 11)
+SOLVE_TAKES_FIXED_POINT_STALL = "fixed_point_stall_window" in (_core.ContactSolver2D.solve.__doc__ or "")
 ORDERINGS = ("coloured", "lexicographic")
 CORE_TAKES_MATRIX = "take_matrix" in (_core.ContactSolver2D.__init__.__doc__ or "")
 
@@ -335,6 +337,29 @@ class ContactProblem:
         A, self._A = self.A, None
         return cls(A, *args, frame_fixed=frame_fixed, frame_values=frame_values, take_matrix=True)
 
+    # Local smoothing (issue 11): None = on for adaptive hierarchies, off for uniform ones (there every
+    # node of a level changes); True/False force it. Set before the first solve.
+    local_smoothing: Optional[bool] = None
+
+    def smooths_locally(self) -> bool:
+        """Do the coarse levels smooth only where they differ from the level below?"""
+        on = self.local_smoothing
+        return bool(self.hierarchy.kind == "adaptive" if on is None else on)
+
+    def _apply_local_smoothing(self, core) -> None:
+        """Coarse level l (1 <= l < finest; the coarsest is solved exactly) smooths only the nodes
+        whose hat functions differ from level l-1 (MeshHierarchy.changed_nodes): elsewhere its
+        space is the one below, whose correction the cycle computes anyway. The finest level's
+        sweeps stay on every node; truncation and the monotone bound restriction are unchanged."""
+        if not self.smooths_locally() or not hasattr(core, "set_rows_to_smooth"):
+            return
+        h = self.hierarchy
+        for level in range(1, h.levels - 1):
+            if core.coarse_matrix(level).shape[0] != h.meshes[level].num_points * self.mesh.dim:
+                return  # unknowns other than the mesh nodes (a subclass's basis): keep every row
+        for level in range(1, h.levels - 1):
+            core.set_rows_to_smooth(level, h.changed_nodes(level))
+
     def core_solver(self, cycle: Optional[str] = None, nu1: Optional[int] = None, nu2: Optional[int] = None):
         """The core solver for the cycle options (defaults: the problem's), built on first use and
         kept: one per (cycle, nu1, nu2)."""
@@ -343,6 +368,7 @@ class ContactProblem:
         if key not in self._solvers:
             t0 = time.perf_counter()
             self._solvers[key] = self._new_core_solver(self.law, key, take_matrix=True)
+            self._apply_local_smoothing(self._solvers[key])
             self._build_seconds[key] = time.perf_counter() - t0
         return self._solvers[key]
 
@@ -367,7 +393,7 @@ class ContactProblem:
               error_reference: Optional[np.ndarray] = None, cycle: Optional[str] = None,
               nu1: Optional[int] = None, nu2: Optional[int] = None,
               progress: Optional[Callable[[dict], None]] = None, threads: int = 0,
-              ordering: Optional[str] = None) -> ContactResult:
+              ordering: Optional[str] = None, fixed_point_stall_window: int = 0) -> ContactResult:
         """Solve with `method`: "nmg" (Algorithm 2 for Coulomb; truncated monotone multigrid for
         frictionless and Tresca; linear multigrid without contact), "tnnmg" (truncated nonsmooth
         Newton multigrid: the fine nonlinear sweeps, one linear cycle for the truncated Newton
@@ -385,7 +411,9 @@ class ContactProblem:
         threads of the sweeps, products and norms (0: all cores); the result is the same bit for
         bit on any count. `ordering` of every Gauss-Seidel sweep: "coloured" (the default: colours
         of the block graph, the rows of one colour at once) or "lexicographic" (one thread for the
-        sweeps)."""
+        sweeps). `fixed_point_stall_window` (Algorithm 1): stop as not converging once the relative
+        change of s_n has not fallen below the one that many outer iterations before (0: run to
+        fixed_point_max); result.extra["outer_changes"] holds the change of every outer iteration."""
         if method not in METHODS:
             raise ValueError(f"method must be one of {METHODS}, got {method!r}")
         options = self._options(cycle, nu1, nu2)
@@ -407,6 +435,13 @@ class ContactProblem:
                   fixed_point_max=int(fixed_point_max), reference=error_reference)
         if SOLVE_TAKES_THREADS:
             kw.update(threads=int(threads), ordering=ordering)
+        if (isinstance(fixed_point_stall_window, (bool, np.bool_)) or not isinstance(fixed_point_stall_window, (int, np.integer))
+                or not 0 <= fixed_point_stall_window <= INT32_MAX):
+            raise ValueError(f"fixed_point_stall_window must be an integer >= 0, got {fixed_point_stall_window!r}")
+        if fixed_point_stall_window:
+            if not SOLVE_TAKES_FIXED_POINT_STALL:
+                raise ValueError("fixed_point_stall_window needs a core built with it (issue 11)")
+            kw["fixed_point_stall_window"] = int(fixed_point_stall_window)
         if SOLVE_TAKES_CYCLE_OPTIONS:
             kw.update(cycle=options.cycle, nu1=options.nu1, nu2=options.nu2, progress=progress)
         elif progress is not None:
@@ -443,6 +478,8 @@ class ContactProblem:
         res = ContactResult.from_raw(self, raw, method)
         res.setup_seconds = self.assembly_seconds + self._build_seconds.get(self._solver_key(options), 0.0)
         res.extra["cycle_options"] = {"cycle": options.cycle, "nu1": options.nu1, "nu2": options.nu2}
+        if method == "fixed-point" and "outer_changes" in raw:
+            res.extra["outer_changes"] = [float(c) for c in raw["outer_changes"]]
         if "threads" in raw:
             res.extra["threads"], res.extra["ordering"] = int(raw["threads"]), str(raw["ordering"])
         return res

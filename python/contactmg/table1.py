@@ -31,6 +31,12 @@ from .hierarchy import MeshHierarchy
 # Measured on 2 cores (triangles, the ten coefficients of the paper): levels 2-7 take about 40 s,
 # levels 2-8 (up to 592,130 dofs, the size of the paper's finest level) 3 minutes (level 9: 23 more).
 DEFAULT_LEVELS = (2, 3, 4, 5, 6, 7, 8)
+# The adaptive table (the default of `contactmg table1`, as in the paper): the paper's levels.
+DEFAULT_ADAPTIVE_LEVELS = (3, 5, 7, 9, 11)
+# Algorithm 1 in the adaptive table stops as not converging when the relative change of s_n has
+# not fallen over this many outer iterations (FixedPointStep; 0 would run every failing solve to
+# fixed_point_max, tens of minutes each at F >= 5 on level 11).
+FIXED_POINT_STALL_WINDOW = 5
 # A "converged" nmg run whose displacement violates the contact conditions by more than
 # VIOLATION_TOL (relative, checks.py) is not a solution: run_table1 then exits with status 3.
 
@@ -40,12 +46,16 @@ _PER_RUN = ("fixed_point_iterations", "fixed_point_vcycles", "fixed_point_status
 
 def table1(levels: Sequence[int] = DEFAULT_LEVELS, frictions: Sequence[float] = PAPER_FRICTIONS,
            cell: str = "triangle", progress: bool = True, tol: float = 1e-11, fixed_point_tol: float = 1e-9,
-           fixed_point_max: int = 100, max_cycles: int = 200, hierarchy="uniform") -> Dict:
+           fixed_point_max: int = 100, max_cycles: int = 200, hierarchy="uniform", jobs: int = 1,
+           fixed_point_stall_window: int = 0) -> Dict:
     """Runs Algorithm 1 ("fixed-point") and Algorithm 2 ("nmg") for every (friction, level) of the
     Hertz benchmark from u = 0 (tqdm progress bar on standard error unless progress=False).
     hierarchy: "uniform", "adaptive" (one hierarchy, hertz_adaptive_hierarchy refined for
     F = ADAPTIVE_FRICTION, for every F; the JSON gains estimated_error per level) or a
     MeshHierarchy of the half disk with at least max(levels) levels.
+    jobs: worker processes for the (friction, level) runs (each one thread; 1: in this process);
+    the counts do not depend on it. fixed_point_stall_window: Algorithm 1 stops as not converging
+    once its change of s_n has not fallen over that many outer iterations (0: off).
     Returns the dict described in the module docstring."""
     from tqdm import tqdm
 
@@ -62,6 +72,7 @@ def table1(levels: Sequence[int] = DEFAULT_LEVELS, frictions: Sequence[float] = 
     elif hierarchy != "uniform":
         raise ValueError(f"hierarchy must be 'uniform', 'adaptive' or a MeshHierarchy, got {hierarchy!r}")
     out["hierarchy"] = "uniform" if full is None else full.kind
+    out["fixed_point_stall_window"] = fixed_point_stall_window
     if full is not None:
         if max(levels) > full.levels:
             raise ValueError(f"the hierarchy has {full.levels} levels, fewer than the {max(levels)} asked for")
@@ -69,36 +80,75 @@ def table1(levels: Sequence[int] = DEFAULT_LEVELS, frictions: Sequence[float] = 
         if full.estimated_error:
             out["estimated_error"] = [float(full.estimated_error[L - 1]) for L in levels]
     rows = {k: [[None] * len(levels) for _ in frictions] for k in _PER_RUN}
-    bar = tqdm(total=len(levels) * len(frictions), disable=not progress, desc="table1", unit="run", file=sys.stderr)
+    opts = dict(tol=tol, max_cycles=max_cycles, fixed_point_tol=fixed_point_tol, fixed_point_max=fixed_point_max,
+                fixed_point_stall_window=fixed_point_stall_window)
+    if isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 1:
+        raise ValueError(f"jobs must be an integer >= 1, got {jobs!r}")
+    # the dearest runs (finest levels, large F) first, so that the workers finish together
+    tasks = sorted(((j, i) for j in range(len(levels)) for i in range(len(frictions))),
+                   key=lambda ji: (-levels[ji[0]], -frictions[ji[1]]))
+    nodes = [None] * len(levels)
+    bar = tqdm(total=len(tasks), disable=not progress, desc="table1", unit="run", file=sys.stderr)
+
+    def store(j, i, run):
+        nodes[j] = run.pop("nodes")
+        out["cycle_type"] = run.pop("cycle_type")
+        for k, v in run.items():
+            rows[k][i][j] = v
+        bar.set_postfix(level=levels[j], F=frictions[i])
+        bar.update()
+
     try:
-        for j, L in enumerate(levels):
-            for i, F in enumerate(frictions):
-                bar.set_postfix(level=L, F=F)
-                p = hertz_problem(cell, L, F, coulomb_at_zero=True,
-                                  hierarchy="uniform" if full is None else full.truncated(L))
-                out["cycle_type"] = f"{p.cycle}({p.nu1},{p.nu2})"
-                if i == 0:
-                    out["nodes"].append(int(p.mesh.num_points))
-                    out["dofs"].append(int(p.mesh.num_points * p.mesh.dim))
-                fp = p.solve("fixed-point", tol=tol, max_cycles=max_cycles, fixed_point_tol=fixed_point_tol,
-                             fixed_point_max=fixed_point_max)
-                nm = p.solve("nmg", tol=tol, max_cycles=max_cycles)
-                rows["fixed_point_iterations"][i][j] = fp.outer_iterations if fp.converged else None
-                rows["fixed_point_vcycles"][i][j] = fp.cycles
-                rows["fixed_point_status"][i][j] = fp.status
-                rows["fixed_point_seconds"][i][j] = fp.solve_seconds
-                rows["fixed_point_violation"][i][j] = contact_conditions(p, fp)["max"]
-                rows["nmg_vcycles"][i][j] = nm.cycles
-                rows["nmg_converged"][i][j] = nm.converged
-                rows["nmg_status"][i][j] = nm.status
-                rows["nmg_seconds"][i][j] = nm.solve_seconds
-                rows["nmg_violation"][i][j] = contact_conditions(p, nm)["max"]
-                bar.update()
+        if jobs == 1:
+            for j, i in tasks:
+                store(j, i, _run_one(cell, levels[j], frictions[i], full, opts, 0))
+        else:
+            import multiprocessing as mp
+            from concurrent.futures import ProcessPoolExecutor
+
+            # spawn, not fork: the parent's OpenMP thread pool does not survive a fork
+            with ProcessPoolExecutor(max_workers=jobs, mp_context=mp.get_context("spawn"),
+                                     initializer=_init_worker, initargs=(full,)) as pool:
+                futures = {pool.submit(_run_in_worker, cell, levels[j], frictions[i], opts): (j, i) for j, i in tasks}
+                from concurrent.futures import as_completed
+                for fut in as_completed(futures):
+                    j, i = futures[fut]
+                    store(j, i, fut.result())
     finally:
         bar.close()
+    out["nodes"] = [int(n) for n in nodes]
+    out["dofs"] = [int(n) * 2 for n in nodes]
     out.update(rows)
     out["seconds"] = time.perf_counter() - t0
     return out
+
+
+_WORKER_HIERARCHY = None
+
+
+def _init_worker(full):
+    global _WORKER_HIERARCHY
+    _WORKER_HIERARCHY = full
+
+
+def _run_in_worker(cell, L, F, opts):
+    return _run_one(cell, L, F, _WORKER_HIERARCHY, opts, 1)
+
+
+def _run_one(cell: str, L: int, F: float, full, opts: Dict, threads: int) -> Dict:
+    """Both algorithms on level L (of `full`, or uniform when None) at friction F."""
+    p = hertz_problem(cell, L, F, coulomb_at_zero=True, hierarchy="uniform" if full is None else full.truncated(L))
+    fp_kw = dict(opts)
+    if not fp_kw.get("fixed_point_stall_window"):
+        fp_kw.pop("fixed_point_stall_window", None)  # a core without the option
+    fp = p.solve("fixed-point", threads=threads, **fp_kw)
+    nm = p.solve("nmg", tol=opts["tol"], max_cycles=opts["max_cycles"], threads=threads)
+    return {"nodes": int(p.mesh.num_points), "cycle_type": f"{p.cycle}({p.nu1},{p.nu2})",
+            "fixed_point_iterations": fp.outer_iterations if fp.converged else None,
+            "fixed_point_vcycles": fp.cycles, "fixed_point_status": fp.status,
+            "fixed_point_seconds": fp.solve_seconds, "fixed_point_violation": contact_conditions(p, fp)["max"],
+            "nmg_vcycles": nm.cycles, "nmg_converged": nm.converged, "nmg_status": nm.status,
+            "nmg_seconds": nm.solve_seconds, "nmg_violation": contact_conditions(p, nm)["max"]}
 
 
 def merge_levels(a: Dict, b: Dict) -> Dict:
@@ -148,19 +198,28 @@ def failed_runs(table: Dict, violation_tol: float = VIOLATION_TOL):
 
 
 def run_table1(args) -> int:
-    """`contactmg table1`: runs table1() over args.levels (default DEFAULT_LEVELS) and
-    args.frictions (default the paper's ten coefficients) for args.cell; writes the JSON to
+    """`contactmg table1`: runs table1() over args.levels (default DEFAULT_ADAPTIVE_LEVELS on the
+    adaptive hierarchy -- the default for triangles --, DEFAULT_LEVELS on the uniform one) and
+    args.frictions (default the paper's ten coefficients) for args.cell, in args.jobs processes; writes the JSON to
     args.json ("-": standard output) and, with args.plot, one PNG at that path with three panels
     (Table 1, Figure 1 left, Figure 1 right). Prints the table as text unless args.quiet (to standard
     error when the JSON goes to standard output). Exit status 0, or 3 when some nmg run did not
     converge or stopped on an iterate that is not a solution (relative violation of the contact
     conditions > VIOLATION_TOL); the JSON and the figure are written in either case."""
     kw = {}
+    hierarchy = getattr(args, "hierarchy", None)
+    if hierarchy is None:  # adaptive by default, as in the paper; quadrilaterals refine uniformly only
+        hierarchy = "adaptive" if args.cell == "triangle" else "uniform"
+    if hierarchy == "adaptive" and args.cell != "triangle":
+        raise ValueError(f"--hierarchy adaptive is for triangles (newest-vertex bisection), not --cell {args.cell}")
+    if hierarchy == "adaptive":
+        kw.update(levels=DEFAULT_ADAPTIVE_LEVELS, fixed_point_stall_window=FIXED_POINT_STALL_WINDOW)
     if args.levels:
         kw["levels"] = args.levels
     if args.frictions:
         kw["frictions"] = args.frictions
-    table = table1(cell=args.cell, progress=not args.quiet, hierarchy=getattr(args, "hierarchy", "uniform"), **kw)
+    jobs = getattr(args, "jobs", 1) or 1
+    table = table1(cell=args.cell, progress=not args.quiet, hierarchy=hierarchy, jobs=jobs, **kw)
     if args.json == "-":
         sys.stdout.write(json.dumps(table, indent=1) + "\n")
         sys.stdout.flush()
