@@ -2,8 +2,8 @@
 
 The upper body is the Hertz half ball of `contactmg sphere` (centre (0, 0, 0.4), radius 0.4, its
 dome below, the nonmortar side); the lower one is its mirror image below z = 0 (centre (0, 0, -0.4),
-dome on top, the mortar side), meshed differently (a coarse block of 2k x 2k x k cubes with k = 4
-instead of 3), so the interface does not match. Their flat faces are moved towards each other by D
+dome on top, the mortar side), meshed differently (its coarse block of 2k x 2k x k cubes is 0.4 R
+wide instead of 0.5 R), so the interface does not match. Their flat faces are moved towards each other by D
 each: for equal materials the interface stays on z = 0 and each body is the one-body sphere with
 displacement D against a frictionless plane."""
 from __future__ import annotations
@@ -26,17 +26,24 @@ E, NU, RADIUS = 2000.0, 0.28, 0.4
 UPPER_CENTER, LOWER_CENTER = (0.0, 0.0, RADIUS), (0.0, 0.0, -RADIUS)
 DISPLACEMENT = 0.02  # each flat face; with equal materials the contact radius of `contactmg sphere`
 DEFAULT_LEVELS = 3
-UPPER_K, LOWER_K = 3, 4
-# the possible contact zone: the nonmortar dome within this distance of the axis (Hertz radius ~0.1)
-ZONE = 0.5 * RADIUS
+# the coarse meshes (half_ball's k and inner): the lower block is narrower, so the element widths at
+# the contact differ by a quarter and no node of one dome meets one of the other except at the
+# pole. (k = 4 below gave a coarsest level of 1,261 nodes whose factorization dominated the cycle.)
+UPPER_K, LOWER_K = 3, 3
+UPPER_INNER, LOWER_INNER = 0.5, 0.4
+# the possible contact zone: the nonmortar dome within this distance of the axis (Hertz radius ~0.1).
+# Not larger: the normal of the upper dome at angle theta from the axis passes the lower centre at
+# 2 R sin(theta); from theta = 30 degrees (r = R/2) on it misses the lower dome, which then cannot
+# cover the nonmortar supports there.
+ZONE = 0.375 * RADIUS
 SEARCH = 0.5 * RADIUS
 
 
-def lower_half_ball(cell: str = "hexahedron", k: int = LOWER_K) -> Mesh:
+def lower_half_ball(cell: str = "hexahedron", k: int = LOWER_K, inner: float = LOWER_INNER) -> Mesh:
     """The upper half of the ball (LOWER_CENTER, RADIUS): the mirror image in z = 0 of the half ball
     of `contactmg sphere` with a k-block core; tags BALL_SURFACE (dome) and BALL_TOP (its flat face
     z = -R, kept as the name of the face that is driven)."""
-    m = half_ball(cell, UPPER_CENTER, RADIUS, k=k)
+    m = half_ball(cell, UPPER_CENTER, RADIUS, k=k, inner=inner)
     pts = m.points * [1.0, 1.0, -1.0]
     # the mirror reverses every cell's orientation: swap its two halves (hexahedra) or two nodes (tetrahedra)
     cells = m.cells[:, [4, 5, 6, 7, 0, 1, 2, 3]] if cell == "hexahedron" else m.cells[:, [0, 2, 1, 3]]
@@ -51,7 +58,7 @@ def lower_half_ball(cell: str = "hexahedron", k: int = LOWER_K) -> Mesh:
 def spheres_problem(cell: str = "hexahedron", levels: int = DEFAULT_LEVELS, friction: float = 0.0, E2: float = E,
                     nu2: float = NU, displacement: float = DISPLACEMENT, coulomb_at_zero: bool = False,
                     cycle: str = "F", nu1: int = 3, nu2_sweeps: int = 3, upper_k: int = UPPER_K,
-                    lower_k: int = LOWER_K) -> TwoBodyProblem:
+                    lower_k: int = LOWER_K, lower_inner: float = LOWER_INNER) -> TwoBodyProblem:
     """The two hemispheres, the upper (E, NU) nonmortar, the lower (E2, nu2) mortar, each flat face
     moved by `displacement` towards the other; Coulomb friction F on the relative tangential
     displacement (frictionless for F = 0 unless coulomb_at_zero)."""
@@ -62,9 +69,9 @@ def spheres_problem(cell: str = "hexahedron", levels: int = DEFAULT_LEVELS, fric
         raise ValueError(f"the displacement D must lie in (0, {0.25 * RADIUS}) (small deformations), got {displacement!r}")
     if cell not in ("tetra", "hexahedron"):
         raise ValueError(f"cell must be 'tetra' or 'hexahedron', got {cell!r}")
-    upper = MeshHierarchy.build(half_ball(cell, UPPER_CENTER, RADIUS, k=upper_k), levels,
+    upper = MeshHierarchy.build(half_ball(cell, UPPER_CENTER, RADIUS, k=upper_k, inner=UPPER_INNER), levels,
                                 projector=SphereProjector(UPPER_CENTER, RADIUS, (BALL_SURFACE,)))
-    lower = MeshHierarchy.build(lower_half_ball(cell, lower_k), levels,
+    lower = MeshHierarchy.build(lower_half_ball(cell, lower_k, lower_inner), levels,
                                 projector=SphereProjector(LOWER_CENTER, RADIUS, (BALL_SURFACE,)))
     bodies = [Body(upper, Material(E, NU), [Dirichlet([BALL_TOP], (0.0, 0.0, -displacement))]),
               Body(lower, Material(E2, nu2), [Dirichlet([BALL_TOP], (0.0, 0.0, displacement))])]
