@@ -58,13 +58,15 @@ print(json.dumps(out))
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--levels", type=int, nargs=2, default=[2, 3])
+    ap.add_argument("--materials", nargs="+", default=[f"{E:g},{nu:g}" for E, nu in MATERIALS],
+                    help="E2,nu2 pairs of the lower body (default: equal and unequal)")
     ap.add_argument("--json")
     a = ap.parse_args()
     rows = []
     fs = ",".join(str(f) for f in FRICTIONS)
     print(f"{'E2,nu2':>10} {'lvl':>3} {'dofs':>9} {'nm':>4} " + " ".join(f"{'F=' + str(f):>6}" for f in FRICTIONS)
           + f" {'rates':>15} {'lin':>4} {'viol':>8} {'setup s':>7} {'solve s':>8} {'MB':>6} {'p0 err':>7} {'a err':>7}")
-    for E2, nu2 in MATERIALS:
+    for E2, nu2 in (tuple(float(v) for v in m.split(",")) for m in a.materials):
         for L in range(a.levels[0], a.levels[1] + 1):
             run = subprocess.run([sys.executable, "-c", CHILD, str(L), str(E2), str(nu2), fs], capture_output=True, text=True)
             if run.returncode != 0:
