@@ -1,4 +1,4 @@
-"""Command line: `contactmg hertz`, `contactmg table1`, the 3D `sphere` and `cork` (cli_3d.py; DESIGN section 9), the two-body `cylinders` (cylinders.py) and `spheres` (spheres.py)."""
+"""Command line: `contactmg hertz`, `contactmg table1` and the 3D `sphere` and `cork` (cli_3d.py; DESIGN section 9)."""
 from __future__ import annotations
 
 import argparse
