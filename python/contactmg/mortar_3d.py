@@ -222,6 +222,30 @@ def _check_surface(x: np.ndarray, facets: np.ndarray, name: str) -> np.ndarray:
     return facets
 
 
+def _candidate_pairs(XS, cS, nS, XM, cM, nM, search: float):
+    """(nonmortar, mortar) element pairs whose projections may overlap: the mortar element faces the
+    nonmortar one (n_m . n_s < 0), lies within `search` (plus its radius) of the nonmortar plane
+    along the normal, and its centre within the sum of the radii of the nonmortar centre across it.
+    A k-d tree of the mortar centres gives the candidates."""
+    rS = np.linalg.norm(XS - cS[:, None], axis=2).max(axis=1)
+    rM = np.linalg.norm(XM - cM[:, None], axis=2).max(axis=1)
+    # |c_m - c_s| <= lateral + |normal distance| <= (rS + rM) + (search + rM)
+    near = cKDTree(cM).query_ball_point(cS, rS + 2 * rM.max() + search)
+    iS = np.repeat(np.arange(len(XS)), [len(v) for v in near])
+    iM = np.fromiter((j for v in near for j in v), dtype=np.int64, count=len(iS))
+    dist = np.einsum("ij,ij->i", cM[iM] - cS[iS], nS[iS])
+    lateral = np.linalg.norm(cM[iM] - cS[iS] - dist[:, None] * nS[iS], axis=1)
+    ok = (np.abs(dist) <= search + rM[iM]) & (lateral <= rS[iS] + rM[iM]) & (np.einsum("ij,ij->i", nM[iM], nS[iS]) < 0)
+    return iS[ok], iM[ok]
+
+
+def _in_plane(X: np.ndarray, c: np.ndarray, e1: np.ndarray, e2: np.ndarray) -> np.ndarray:
+    """Points X (p, k, 3) in the plane coordinates (p, k, 2) of the frames (c, e1, e2) (p, 3): the
+    orthogonal projection along e1 x e2."""
+    r = X - c[:, None]
+    return np.stack([np.einsum("pkd,pd->pk", r, e1), np.einsum("pkd,pd->pk", r, e2)], axis=2)
+
+
 def mortar_coupling_3d(xs: np.ndarray, slave_facets: np.ndarray, xm: np.ndarray, master_facets: np.ndarray,
                        search: float) -> MortarCoupling:
     """The dual mortar matrices of the nonmortar surface `slave_facets` (triangles or quads of node
@@ -248,18 +272,7 @@ def mortar_coupling_3d(xs: np.ndarray, slave_facets: np.ndarray, xm: np.ndarray,
         np.add.at(normals, local[:, j], areaS)
     normals /= np.linalg.norm(normals, axis=1)[:, None]
 
-    # candidate pairs: centres within reach, the mortar element near the plane and facing it
-    rS = np.linalg.norm(XS - cS[:, None], axis=2).max(axis=1)
-    rM = np.linalg.norm(XM - cM[:, None], axis=2).max(axis=1)
-    tree = cKDTree(cM)
-    near = tree.query_ball_point(cS, rS + rM.max() + search)
-    iS = np.repeat(np.arange(len(sf)), [len(v) for v in near])
-    iM = np.fromiter((j for v in near for j in v), dtype=np.int64, count=len(iS))
-    dist = np.einsum("ij,ij->i", cM[iM] - cS[iS], nS[iS])
-    lateral = np.linalg.norm(cM[iM] - cS[iS] - dist[:, None] * nS[iS], axis=1)
-    ok = (np.abs(dist) <= search + rM[iM]) & (lateral <= rS[iS] + rM[iM]) & (np.einsum("ij,ij->i", nM[iM], nS[iS]) < 0)
-    iS, iM = iS[ok], iM[ok]
-
+    iS, iM = _candidate_pairs(XS, cS, nS, XM, cM, nM, search)
     rows_out, cols_out, vals_out = [], [], []
     covered_int = np.zeros(ns)
     for chunk in np.array_split(np.arange(len(iS)), max(1, len(iS) // 20000)):
@@ -267,11 +280,7 @@ def mortar_coupling_3d(xs: np.ndarray, slave_facets: np.ndarray, xm: np.ndarray,
             continue
         a, b = iS[chunk], iM[chunk]
         # both elements in the nonmortar element's plane coordinates (projection along its normal)
-        def plane(X):
-            r = X - cS[a][:, None]
-            return np.stack([np.einsum("pkd,pd->pk", r, e1[a]), np.einsum("pkd,pd->pk", r, e2[a])], axis=2)
-
-        S2, M2 = plane(XS[a]), plane(XM[b])
+        S2, M2 = _in_plane(XS[a], cS[a], e1[a], e2[a]), _in_plane(XM[b], cS[a], e1[a], e2[a])
         # the mortar element faces the other way: reversed, its projection runs counter-clockwise
         P, cnt = clip_polygons(M2[:, ::-1], np.full(len(a), km), S2, np.full(len(a), ks))
         area = polygon_area(P, cnt)
