@@ -372,7 +372,8 @@ def test_cli_spheres_json_vtu(tmp_path):
     from contactmg.spheres import two_body_p0, two_body_radius
 
     vtu = tmp_path / "s.vtu"
-    run = _cli("spheres", "--levels", "1", "--friction", "0.4", "--E2", "3000", "--json", "-", "-q", "--vtu", str(vtu))
+    run = _cli("spheres", "--levels", "1", "--friction", "0.4", "--E2", "3000", "--threads", "1", "--json", "-", "-q",
+               "--vtu", str(vtu))
     assert run.returncode == 0, run.stderr
     rep = json.loads(run.stdout)
     for key in ("dim", "cell", "levels", "dofs", "converged", "cycles", "contact_nodes", "stick_nodes", "slip_nodes",
@@ -383,7 +384,7 @@ def test_cli_spheres_json_vtu(tmp_path):
     m1, m2 = Material(2000.0, 0.28), Material(3000.0, 0.28)
     assert rep["hertz_radius"] == pytest.approx(two_body_radius(P, 0.4, 0.4, m1, m2), rel=1e-12)
     assert rep["hertz_p0"] == pytest.approx(3 * P / (2 * np.pi * rep["hertz_radius"] ** 2), rel=1e-12)
-    assert rep["check_violation"] <= 1e-6
+    assert rep["check_violation"] <= 1e-6 and rep["threads"] == 1
     m = meshio.read(vtu)
     assert set(np.unique(m.point_data["body_id"])) == {0, 1}
     assert len(m.points) == rep["nodes"]

@@ -135,6 +135,7 @@ def add_parser(sub):
     c.add_argument("--tol", type=cli._nonneg_float("--tol", positive=True), default=1e-11)
     c.add_argument("--max-cycles", type=cli._positive_int("--max-cycles", 1, cli.MAX_CYCLES), default=200)
     c.add_argument("--cycle", choices=["V", "W", "F"], default="F")
+    cli.add_thread_options(c)
     c.add_argument("--json", type=cli._writable, metavar="PATH|-")
     c.add_argument("--vtu", type=cli._with_suffix("--vtu", (".vtu",)), metavar="PATH")
     c.add_argument("-q", "--quiet", action="store_true")
@@ -147,7 +148,8 @@ def run_spheres(args) -> int:
         raise ValueError(f"--nu2: Poisson's ratio must lie in (-1, 0.5), got {args.nu2}")
     problem = spheres_problem(args.cell, args.levels, args.friction, args.E2, args.nu2, args.displacement,
                               coulomb_at_zero=args.method == "fixed-point", cycle=args.cycle)
-    result = problem.solve(args.method, tol=args.tol, max_cycles=args.max_cycles)
+    result = problem.solve(args.method, tol=args.tol, max_cycles=args.max_cycles, threads=args.threads,
+                           ordering=args.ordering)
     ns = argparse.Namespace(**vars(args))
     ns.nu1, ns.nu2 = 3, 3  # hertz_report's cycle_type: the smoothing steps
     report = cli_3d._report(ns, problem, result, "spheres")
