@@ -420,3 +420,13 @@ def test_spheres_level3_against_the_two_body_hertz_formulas():
     m1, m2 = p.bodies[0].material, p.bodies[1].material
     assert central_pressure(r) == pytest.approx(two_body_p0(P, RADIUS, RADIUS, m1, m2), rel=0.05)
     assert abs(radius_of(r, (STICK, SLIP)) - two_body_radius(P, RADIUS, RADIUS, m1, m2)) <= element_width(3)
+
+
+def test_bodies_of_two_dimensions_are_a_clear_error():
+    from contactmg.generators import rectangle
+
+    up, _ = _stacked_boxes("hexahedron", levels=2)
+    flat = MeshHierarchy.build(rectangle(3, 3, 1, 1), 2)
+    with pytest.raises(ValueError, match="one dimension"):
+        TwoBodyProblem([Body(up, MAT, [Dirichlet([TOP], (0.0, 0.0, -0.01))]), Body(flat, MAT, [Dirichlet([1], (0.0, 0.0))])],
+                       ContactPair(0, 1, [BOTTOM], [3], search=0.1))
