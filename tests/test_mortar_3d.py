@@ -86,6 +86,12 @@ def test_dual_basis_of_a_triangle_is_4phi_minus_1_and_biorthogonal_on_quads():
     assert np.allclose(A[0], 4 * np.eye(3) - 1, rtol=0, atol=1e-11)
     area = 0.5 * np.linalg.norm(np.cross(X[0, 1] - X[0, 0], X[0, 2] - X[0, 0]))
     assert np.allclose(De, area / 3)
+    # a parallelogram: the tensor product of the 1D duals 2 phi_a - phi_b
+    P = np.array([[[0.0, 0.0, 0.0], [2.0, 0.0, 0.0], [2.5, 1.0, 0.3], [0.5, 1.0, 0.3]]])
+    B = np.array([[2.0, -1.0], [-1.0, 2.0]])
+    ij = [(0, 0), (1, 0), (1, 1), (0, 1)]  # VTK order
+    tensor = np.array([[B[i, k] * B[j, l] for (k, l) in ij] for (i, j) in ij])
+    assert np.allclose(element_dual_coefficients(P)[0][0], tensor, rtol=0, atol=1e-11)
     # a planar non-parallelogram quad: int psi_i phi_j = delta_ij int phi_i by a fine tensor rule
     Q = np.array([[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.3, 0.9, 0.0], [-0.1, 1.2, 0.0]]])
     A, De = element_dual_coefficients(Q)
