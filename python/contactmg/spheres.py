@@ -127,7 +127,7 @@ def add_parser(sub):
     c.add_argument("--levels", type=cli._positive_int("--levels", 1, 7), default=DEFAULT_LEVELS,
                    help="levels in all; level 1 is the coarse mesh")
     c.add_argument("--friction", type=cli._nonneg_float("--friction"), default=0.0)
-    c.add_argument("--method", choices=["nmg", "fixed-point", "linear"], default="nmg")
+    c.add_argument("--method", choices=["nmg", "fixed-point", "linear", "tnnmg"], default="nmg")
     c.add_argument("--E2", type=cli._nonneg_float("--E2", positive=True), default=E, help="Young's modulus of the lower body")
     c.add_argument("--nu2", type=float, default=NU, help="Poisson's ratio of the lower body")
     c.add_argument("--displacement", type=cli._nonneg_float("--displacement", positive=True), default=DISPLACEMENT,
