@@ -151,6 +151,8 @@ def _parser() -> argparse.ArgumentParser:
     cli_3d.add_parsers(sub)
     from . import cylinders
     cylinders.add_parser(sub)
+    from . import spheres
+    spheres.add_parser(sub)
     return p
 
 
@@ -253,6 +255,9 @@ def main(argv: Optional[List[str]] = None) -> int:
         if args.command == "cylinders":
             from .cylinders import run_cylinders
             return run_cylinders(args)
+        if args.command == "spheres":
+            from .spheres import run_spheres
+            return run_spheres(args)
         from .cli_3d import COMMANDS
         if args.command in COMMANDS:
             return COMMANDS[args.command](args)

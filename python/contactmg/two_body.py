@@ -31,6 +31,7 @@ from .hierarchy import MeshHierarchy, Transfer
 from .material import Material
 from .mesh import Mesh
 from .mortar import MortarCoupling, mortar_coupling_2d
+from .mortar_3d import mortar_coupling_3d
 from .problem import ContactBoundary, ContactProblem, CycleOptions, Dirichlet, tag_tuple
 
 
@@ -81,7 +82,7 @@ def _scalar_transfer(P: sp.csr_matrix) -> Transfer:
 
 
 class TwoBodyProblem(ContactProblem):
-    """Bodies in contact through one mortar pair (2D). solve() and its methods ("nmg",
+    """Bodies in contact through one mortar pair (2D, or 3D through mortar_3d.py). solve() and its methods ("nmg",
     "fixed-point", "linear") are those of ContactProblem, on the transformed problem; the result's
     displacement is the canonical u = T w on the union mesh (`mesh`, with `body_id` per node), its
     contact quantities those of the nonmortar nodes (contact_force: the nonmortar nodal force in the
@@ -103,8 +104,9 @@ class TwoBodyProblem(ContactProblem):
         levels = {b.hierarchy.levels for b in bodies}
         if len(levels) != 1:
             raise ValueError(f"the bodies' hierarchies need the same number of levels, got {sorted(levels)}")
-        if any(b.hierarchy.finest.dim != 2 for b in bodies):
-            raise ValueError("two-body contact is 2D (the mortar projection of 3D surfaces is not built)")
+        dims = {b.hierarchy.finest.dim for b in bodies}
+        if len(dims) != 1:
+            raise ValueError(f"the bodies need one dimension, got {sorted(dims)}")
         self.bodies, self.pair = bodies, pair
         self.default_cycle = CycleOptions(cycle, nu1, nu2)
         self.friction = friction
@@ -112,7 +114,7 @@ class TwoBodyProblem(ContactProblem):
         # each body on its own: assembly, Dirichlet data, its rigid motions held (no contact relied on)
         self.parts = [ContactProblem(b.hierarchy, b.material, b.dirichlet, body_force=b.body_force,
                                      traction=b.traction) for b in bodies]
-        d = 2
+        d = dims.pop()
         sizes = [p.mesh.num_points for p in self.parts]
         self.offsets = np.r_[0, np.cumsum(sizes)].astype(np.int64)
         n = int(self.offsets[-1])
@@ -173,8 +175,8 @@ class TwoBodyProblem(ContactProblem):
         msel = np.isin(mm.facet_tags, list(tag_tuple(self.pair.mortar_tags, "mortar_tags")))
         if not np.any(msel):
             raise ValueError(f"no facet of body {self.pair.mortar} carries the mortar tags {list(self.pair.mortar_tags)}")
-        return mortar_coupling_2d(sm.points, sm.facets[self._nonmortar_facet_mask()], mm.points, mm.facets[msel],
-                                  self.pair.search)
+        coupling = mortar_coupling_2d if sm.dim == 2 else mortar_coupling_3d
+        return coupling(sm.points, sm.facets[self._nonmortar_facet_mask()], mm.points, mm.facets[msel], self.pair.search)
 
     def _transfers(self):
         """Per level the union of the bodies' interpolations; on the finest, T^{-1} P = (I - N) P."""
@@ -196,7 +198,8 @@ class TwoBodyProblem(ContactProblem):
         # the transformed matrix stays here (take_matrix is declined): it is what checks and reports multiply with
         c = self.contact
         values = self.fixed_values if fixed_values is None else fixed_values
-        return _core.ContactSolver2D(self.A, self.load if load is None else load, self.fixed, values,
+        cls = _core.ContactSolver2D if self.mesh.dim == 2 else _core.ContactSolver3D
+        return cls(self.A, self.load if load is None else load, self.fixed, values,
                                      c.nodes, c.normals, c.gaps, self.coefficients, law,
                                      [t.as_tuple() for t in self.transfers], options.cycle, options.nu1, options.nu2,
                                      frame_fixed=frame_fixed, frame_values=frame_values)
