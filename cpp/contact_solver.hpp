@@ -148,7 +148,7 @@ class ContactSolver {
 
   // The truncated linear cycle of TNNMG's linear correction on the fine level (made on first use).
   TruncatedLinearCycle<d>& fine_cycle() {
-    if (!fine_cycle_) fine_cycle_ = std::make_unique<TruncatedLinearCycle<d>>(P_.matrix());
+    if (!fine_cycle_) fine_cycle_ = std::make_unique<TruncatedLinearCycle<d>>(P_.matrix(), P_.basis());
     return *fine_cycle_;
   }
 

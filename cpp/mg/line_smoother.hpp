@@ -20,7 +20,7 @@
 
 namespace cmg {
 
-constexpr double kLineRatio = 3.0;
+constexpr double kLineRatio = 3.5;
 
 // The lines of a level: line k holds the nodes nodes[ptr[k] .. ptr[k+1]) in chain order.
 struct LineSet {
@@ -43,9 +43,13 @@ double coupling_strength(const CMatMap<d>& B) {
   return std::max(0.0, -B.trace());
 }
 
-// Lines of A (square, symmetric pattern). Every row lies on exactly one line.
-template <int d>
-LineSet find_lines(const BlockMatrix<d>& A) {
+// Lines of A (square, symmetric pattern). Every row lies on exactly one line. frame(i): the
+// orthogonal block Q_i of a node whose dofs A holds in a local frame (contact nodes, x = Q_i x_local),
+// or nullptr: the strengths are taken of the canonical blocks Q_i A_ij Q_j^T, since the trace is not
+// invariant under a rotation of one side (along a contact boundary the frames would otherwise turn
+// the couplings into the body weak and make a false line of the boundary).
+template <int d, class Frame>
+LineSet find_lines(const BlockMatrix<d>& A, Frame&& frame) {
   const Index n = A.rows;
   std::vector<std::array<Index, 2>> prop(n, {-1, -1});
   for (Index i = 0; i < n; ++i) {
@@ -54,7 +58,16 @@ LineSet find_lines(const BlockMatrix<d>& A) {
     for (Index k = A.indptr[i]; k < A.indptr[i + 1]; ++k) {
       const Index j = A.indices[k];
       if (j == i) continue;
-      const double s = coupling_strength<d>(A.block(k));
+      const Mat<d>* Qi = frame(i), *Qj = frame(j);
+      double s;
+      if (!Qi && !Qj) {
+        s = coupling_strength<d>(A.block(k));
+      } else {
+        Mat<d> B = A.block(k);
+        if (Qi) B = *Qi * B;
+        if (Qj) B = B * Qj->transpose();
+        s = std::max(0.0, -B.trace());
+      }
       if (s > s1) { s3 = s2; s2 = s1; j2 = j1; s1 = s; j1 = j; }
       else if (s > s2) { s3 = s2; s2 = s; j2 = j; }
       else if (s > s3) s3 = s;
@@ -88,6 +101,11 @@ LineSet find_lines(const BlockMatrix<d>& A) {
   for (Index i = 0; i < n; ++i)  // what is left are rings
     if (!done[i]) walk(i);
   return L;
+}
+
+template <int d>
+LineSet find_lines(const BlockMatrix<d>& A) {
+  return find_lines<d>(A, [](Index) -> const Mat<d>* { return nullptr; });
 }
 
 // Line Gauss-Seidel for the matrix K = M (A + H) M + (I - M) of the active dofs (M = diag(active):
@@ -141,13 +159,14 @@ class LineGaussSeidel {
         MatMap<d>(Ginv_.data() + i * d * d) = Gprev_inv;
       }
     }
+    longest_ = lines_.longest();
     factored_ = true;
   }
   bool factored() const { return factored_; }
 
   void sweep(const BlockMatrix<d>& A, const std::uint8_t* active, const double* b, double* x, bool forward) const {
     const Index nl = lines_.num_lines();
-    y_.resize(lines_.longest() * d);
+    y_.resize(longest_ * d);
     for (Index ll = 0; ll < nl; ++ll) solve_line(A, active, b, x, forward ? ll : nl - 1 - ll);
   }
 
@@ -189,6 +208,7 @@ class LineGaussSeidel {
   std::vector<double> Ginv_, lower_;  // per node: G_k^{-1}; the masked block to the previous node of its line
   std::vector<Index> prev_, next_;    // neighbours on the line (-1 at the ends)
   mutable std::vector<double> y_;  // scratch of one line's forward elimination
+  Index longest_ = 0;
   bool factored_ = false;
 };
 

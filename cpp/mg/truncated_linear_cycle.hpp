@@ -9,6 +9,7 @@
 // truncated: w = 0 there. With nu1 = nu2 and a V-cycle the cycle is a symmetric operator (the
 // preconditioner of pcg.hpp); other choices are only nearly symmetric, which the flexible PCG takes.
 #pragma once
+#include "basis_transform.hpp"
 #include "mg/cycle.hpp"
 #include "mg/line_smoother.hpp"
 
@@ -17,7 +18,8 @@ namespace cmg {
 template <int d>
 class TruncatedLinearCycle {
  public:
-  explicit TruncatedLinearCycle(const BlockMatrix<d>& A) : A_(A) {}
+  // A in the nodal frames of `basis` (the lines are found from its canonical blocks)
+  TruncatedLinearCycle(const BlockMatrix<d>& A, const BasisTransform<d>& basis) : A_(A), basis_(basis) {}
 
   // K for this truncation and Hessian; the fine lines are found once, from A.
   void set_linearization(const std::uint8_t* mask, const std::vector<std::pair<Index, Mat<d>>>& hessian, bool lines) {
@@ -26,7 +28,7 @@ class TruncatedLinearCycle {
       use_lines_ = lines;
       LineSet L;
       if (lines) {
-        if (fine_lines_.nodes.empty()) fine_lines_ = find_lines<d>(A_);
+        if (fine_lines_.nodes.empty()) fine_lines_ = find_lines<d>(A_, [&](Index i) { return basis_.block_of(i); });
         L = fine_lines_;
       } else {  // every node a line of its own: the point-block Gauss-Seidel of K
         L.nodes.resize(n);
@@ -85,6 +87,7 @@ class TruncatedLinearCycle {
   }
 
   const BlockMatrix<d>& A_;
+  const BasisTransform<d>& basis_;
   LineSet fine_lines_;
   LineGaussSeidel<d> gs_;
   bool use_lines_ = false;
