@@ -20,6 +20,10 @@ class BasisTransform {
   Index num_blocks() const { return (Index)Q_.size(); }
   const Mat<d>& block(Index c) const { return Q_[c]; }
   Index node(Index c) const { return nodes_[c]; }
+  // the block of node i, or nullptr where the node keeps the canonical basis
+  const Mat<d>* block_of(Index i) const {
+    return block_of_node_.empty() || block_of_node_[i] < 0 ? nullptr : &Q_[block_of_node_[i]];
+  }
 
   // A <- T^T A T
   void transform_matrix(BlockMatrix<d>& A) const {

@@ -91,6 +91,7 @@ py::dict record_to_dict(const CycleRecord& r) {
   o["cycle"] = r.cycle; o["outer"] = r.outer; o["correction_norm"] = r.correction_norm; o["energy"] = r.energy;
   o["seconds"] = r.seconds; o["error"] = r.error; o["active"] = r.active; o["stick"] = r.stick; o["slip"] = r.slip;
   o["rebuilt"] = r.rebuilt; o["step_size"] = r.step_size; o["frozen_decrease"] = r.frozen_decrease;
+  o["linear_iterations"] = r.linear_iterations;
   return o;
 }
 
@@ -104,7 +105,7 @@ py::dict result_to_dict(const SolveResult& R, const ContactSolver<d>& S) {
   out["friction_bound"] = to_numpy(R.friction_bound, {(py::ssize_t)nc});
   out["state"] = to_numpy(R.state, {(py::ssize_t)nc});
   const py::ssize_t h = R.history.size();
-  py::array_t<int> cyc(h), outer(h);
+  py::array_t<int> cyc(h), outer(h), linits(h);
   py::array_t<double> cn(h), en(h), sec(h), err(h), step(h), fdec(h);
   py::array_t<Index> act(h), st(h), sl(h);
   py::array_t<bool> rb(h);
@@ -113,12 +114,12 @@ py::dict result_to_dict(const SolveResult& R, const ContactSolver<d>& S) {
     cyc.mutable_at(k) = r.cycle; outer.mutable_at(k) = r.outer; cn.mutable_at(k) = r.correction_norm;
     en.mutable_at(k) = r.energy; sec.mutable_at(k) = r.seconds; err.mutable_at(k) = r.error; act.mutable_at(k) = r.active;
     st.mutable_at(k) = r.stick; sl.mutable_at(k) = r.slip; rb.mutable_at(k) = r.rebuilt;
-    step.mutable_at(k) = r.step_size; fdec.mutable_at(k) = r.frozen_decrease;
+    step.mutable_at(k) = r.step_size; fdec.mutable_at(k) = r.frozen_decrease; linits.mutable_at(k) = r.linear_iterations;
   }
   py::dict hist;
   hist["cycle"] = cyc; hist["outer"] = outer; hist["correction_norm"] = cn; hist["energy"] = en;
   hist["seconds"] = sec; hist["error"] = err; hist["active"] = act; hist["stick"] = st; hist["slip"] = sl; hist["rebuilt"] = rb;
-  hist["step_size"] = step; hist["frozen_decrease"] = fdec;
+  hist["step_size"] = step; hist["frozen_decrease"] = fdec; hist["linear_iterations"] = linits;
   out["history"] = hist;
   out["outer_changes"] = to_numpy(R.outer_changes, {(py::ssize_t)R.outer_changes.size()});
   out["converged"] = R.converged;
@@ -246,7 +247,7 @@ void bind_dim(py::module_& m) {
            "in its free directions); frame_fixed/frame_values (nc, d): components fixed in the contact frames")
       .def("solve", [](CS& S, py::object u0, double tol, double rtol, int max_cycles, bool fixed_point, double fp_tol,
                        int fp_max, py::object reference, py::object cycle, py::object nu1, py::object nu2, py::object progress,
-                       bool tnnmg, py::object ordering, int threads, int fp_stall) {
+                       bool tnnmg, py::object ordering, int threads, int fp_stall, py::object linear, py::object lines) {
              SolveOptions o;
              if (fp_stall < 0) throw InputError("fixed_point_stall_window must be >= 0 (0: off)");
              o.fixed_point_stall_window = fp_stall;
@@ -258,6 +259,8 @@ void bind_dim(py::module_& m) {
              if (!nu1.is_none()) co.nu1 = nu1.cast<int>();
              if (!nu2.is_none()) co.nu2 = nu2.cast<int>();
              if (!ordering.is_none()) co.ordering = parse_ordering(ordering.cast<std::string>());
+             if (!linear.is_none()) co.linear = parse_linear_correction(linear.cast<std::string>());
+             if (!lines.is_none()) co.lines = lines.cast<bool>();
              check_smoothing_steps(co.nu1, co.nu2);
              if (threads < 0) throw InputError("threads must be >= 0 (0: all cores)");
              if (!progress.is_none() && !PyCallable_Check(progress.ptr())) throw InputError("progress must be callable or None");
@@ -298,6 +301,7 @@ void bind_dim(py::module_& m) {
              py::dict out = result_to_dict<d>(R, S);
              out["cycle_type"] = std::string(cycle_name(co.cycle)) + "(" + std::to_string(co.nu1) + "," + std::to_string(co.nu2) + ")";
              out["ordering"] = ordering_name(co.ordering);
+             if (tnnmg) { out["linear_correction"] = linear_correction_name(co.linear); out["lines"] = co.lines; }
              out["threads"] = threads == 0 ? max_threads() : (have_openmp() ? threads : 1);
              return out;
            },
@@ -306,6 +310,9 @@ void bind_dim(py::module_& m) {
            py::arg("reference") = py::none(), py::arg("cycle") = py::none(), py::arg("nu1") = py::none(),
            py::arg("nu2") = py::none(), py::arg("progress") = py::none(), py::arg("tnnmg") = false,
            py::arg("ordering") = py::none(), py::arg("threads") = 0, py::arg("fixed_point_stall_window") = 0,
+           py::arg("linear") = py::none(), py::arg("lines") = py::none(),
+           "linear (tnnmg): its linear correction, 'pcg' (default), 'cycle' or 'coarse'; lines (tnnmg): line "
+           "smoothing in it where the level matrices have lines (default True); "
            "tnnmg: truncated nonsmooth Newton multigrid steps instead of monotone multigrid cycles; "
            "cycle, nu1, nu2, ordering override the constructor's for this solve; threads: 0 = all cores (the result "
            "does not depend on it); progress(record: dict) is called after every "
@@ -348,7 +355,65 @@ void bind_dim(py::module_& m) {
       .def("fine_matrix", [](const CS& S) { return std::make_shared<BM>(S.fine_matrix()); })
       .def("memory_bytes", &CS::memory_bytes)
       .def_property_readonly("num_colours", &CS::num_fine_colours, "colours of the fine block graph (coloured sweeps)")
-      .def("rebuild_coarse", &CS::rebuild_coarse, "Full Galerkin rebuild of the coarse matrices for the current truncation");
+      .def("rebuild_coarse", &CS::rebuild_coarse, "Full Galerkin rebuild of the coarse matrices for the current truncation")
+      .def("linear_solve", [](CS& S, DArr r, int max_iterations, double reduction, bool lines, py::object cycle) {
+             require_shape(r, "r", {(py::ssize_t)S.num_nodes(), d});
+             if (max_iterations < 1) throw InputError("max_iterations must be at least 1");
+             CycleOptions co = S.cycle_options();
+             if (!cycle.is_none()) co.cycle = parse_cycle(cycle.cast<std::string>());
+             co.lines = lines;
+             std::vector<double> e, w;
+             {
+               py::gil_scoped_release release;
+               w = S.linear_solve(r.data(), co, max_iterations, reduction, e);
+             }
+             return py::make_tuple(to_numpy(w, {(py::ssize_t)S.num_nodes(), d}), to_numpy(e, {(py::ssize_t)e.size()}));
+           }, py::arg("r"), py::arg("max_iterations"), py::arg("reduction") = 0.0, py::arg("lines") = true,
+           py::arg("cycle") = py::none(),
+           "TNNMG's linear correction on the current linearization (fresh solver: linear elasticity in the contact "
+           "frames, Dirichlet dofs masked): PCG preconditioned by the truncated linear cycle for K w = M r, r in the "
+           "frames. Returns (w, energies after each iteration)")
+      .def("fine_lines", [](CS& S, bool lines) {
+             const LineSet& L = S.fine_lines(lines);
+             py::list out;
+             for (Index k = 0; k < L.num_lines(); ++k)
+               out.append(to_numpy(std::vector<Index>(L.nodes.begin() + L.ptr[k], L.nodes.begin() + L.ptr[k + 1]),
+                                   {(py::ssize_t)(L.ptr[k + 1] - L.ptr[k])}));
+             return out;
+           }, py::arg("lines") = true, "the lines of the fine line smoother (node ids in chain order)")
+      .def("coarse_lines", [](const CS& S, int l) {
+             if (l < 0 || l >= S.hierarchy().num_coarse_levels()) throw py::index_error("no such coarse level");
+             const LineSet& L = S.hierarchy().level(l).lines.lines();
+             py::list out;
+             for (Index k = 0; k < L.num_lines(); ++k)
+               out.append(to_numpy(std::vector<Index>(L.nodes.begin() + L.ptr[k], L.nodes.begin() + L.ptr[k + 1]),
+                                   {(py::ssize_t)(L.ptr[k + 1] - L.ptr[k])}));
+             return out;
+           }, py::arg("level"), "the lines of coarse level `level` (node ids in chain order)");
+
+  m.def(("line_gauss_seidel_" + sfx).c_str(), [](const BM& A, DArr b, DArr x0, int sweeps, py::object active) {
+    if (A.rows != A.cols) throw InputError("the matrix must be square");
+    require_shape(b, "b", {(py::ssize_t)A.rows, d});
+    require_shape(x0, "x0", {(py::ssize_t)A.rows, d});
+    if (sweeps < 0) throw InputError("sweeps must be >= 0");
+    std::vector<std::uint8_t> act;
+    if (!active.is_none()) {
+      py::array_t<std::uint8_t, py::array::c_style | py::array::forcecast> a = active.cast<py::array_t<std::uint8_t, py::array::c_style | py::array::forcecast>>();
+      require_shape(a, "active", {(py::ssize_t)A.rows, d});
+      act.assign(a.data(), a.data() + A.rows * d);
+    }
+    LineGaussSeidel<d> gs(find_lines<d>(A));
+    gs.factor(A, act.empty() ? nullptr : act.data());
+    std::vector<double> x(x0.data(), x0.data() + A.rows * d);
+    for (int s = 0; s < sweeps; ++s) gs.sweep(A, act.empty() ? nullptr : act.data(), b.data(), x.data(), s % 2 == 0);
+    py::list lines;
+    const LineSet& L = gs.lines();
+    for (Index k = 0; k < L.num_lines(); ++k)
+      lines.append(to_numpy(std::vector<Index>(L.nodes.begin() + L.ptr[k], L.nodes.begin() + L.ptr[k + 1]), {(py::ssize_t)(L.ptr[k + 1] - L.ptr[k])}));
+    return py::make_tuple(to_numpy(x, {(py::ssize_t)A.rows, d}), lines);
+  }, py::arg("A"), py::arg("b"), py::arg("x0"), py::arg("sweeps") = 1, py::arg("active") = py::none(),
+     "Line Gauss-Seidel (mg/line_smoother.hpp): the lines of A found from the matrix, `sweeps` sweeps (alternating, "
+     "forward first) for A x = b from x0, active (n, d): 0 on truncated dofs. Returns (x, lines)");
 
   m.def(("solve_node_tresca_" + sfx).c_str(), [](DArr B, DArr b, double g, double s, int free) {
     require_shape(B, "B", {d, d}); require_shape(b, "b", {d});

@@ -5,6 +5,7 @@
 #pragma once
 #include "laws/law.hpp"
 #include "steps/fixed_point_step.hpp"
+#include <memory>
 #include "steps/tnnmg_step.hpp"
 
 namespace cmg {
@@ -41,7 +42,7 @@ class ContactSolver {
   Monitor& monitor() { return mon_; }
   std::size_t memory_bytes() const {
     return P_.memory_bytes() + H_.memory_bytes() + C_.memory_bytes() + sizeof(double) * 8 * P_.num_nodes() * d +
-           sizeof(Index) * fine_coloured_.rows().size();
+           sizeof(Index) * fine_coloured_.rows().size() + (fine_cycle_ ? fine_cycle_->memory_bytes() : 0);
   }
   // Load paths: friction on the slip increment from the canonical displacement u_prev (nullptr: none).
   void set_slip_origin(const double* u_prev) { P_.set_slip_origin(u_prev); }
@@ -75,11 +76,33 @@ class ContactSolver {
       start(u0);
       P_.set_bounds_to_coefficients();
       SolveResult R;
-      TnnmgStep<d, Law> step(P_, H_, C_, built_, it_, cyc, fine_order(cyc.ordering));
+      TnnmgStep<d, Law> step(P_, H_, C_, built_, it_, cyc, fine_cycle(), fine_order(cyc.ordering));
       run_loop(step, opt, mon_, R, 0);
       finish<Law>(R);
       return R;
     });
+  }
+
+  // The linear correction of TNNMG on the linearization the coarse levels are built for (a fresh
+  // solver: the Dirichlet mask alone, i.e. linear elasticity in the contact frames): PCG with the
+  // truncated linear cycle for K w = M r (r in the frames). Returns w; `energies` the energy
+  // 1/2 w^T K w - r^T M w after each iteration (0 first). For tests and diagnostics.
+  std::vector<double> linear_solve(const double* r, const CycleOptions& cyc, int max_iterations, double reduction,
+                                   std::vector<double>& energies) {
+    TruncatedLinearCycle<d>& lin = fine_cycle();
+    lin.set_linearization(built_.mask.data(), built_.hessian, cyc.lines);
+    const Index n = P_.num_nodes() * d;
+    std::vector<double> rm(n), w(n);
+    for (Index k = 0; k < n; ++k) rm[k] = built_.mask[k] * r[k];
+    PcgReport rep = pcg(
+        n, [&](const double* x, double* y) { lin.multiply(x, y); },
+        [&](const double* res, double* z) { lin.apply(C_, cyc, res, z); }, rm.data(), w.data(), max_iterations, reduction, true);
+    energies = rep.energy;
+    return w;
+  }
+  const LineSet& fine_lines(bool lines) {
+    fine_cycle().set_linearization(built_.mask.data(), built_.hessian, lines);
+    return fine_cycle().lines();
   }
 
   // Algorithm 1 (Coulomb only).
@@ -121,6 +144,12 @@ class ContactSolver {
       if (fine) P_.basis().transform_prolongation(P.back());
     }
     return P;
+  }
+
+  // The truncated linear cycle of TNNMG's linear correction on the fine level (made on first use).
+  TruncatedLinearCycle<d>& fine_cycle() {
+    if (!fine_cycle_) fine_cycle_ = std::make_unique<TruncatedLinearCycle<d>>(P_.matrix(), P_.basis());
+    return *fine_cycle_;
   }
 
   // The order of the fine nonlinear sweeps (the colouring made once, on first use).
@@ -168,6 +197,7 @@ class ContactSolver {
   FineIterate<d> it_;
   Monitor mon_;
   SweepOrder lexicographic_, fine_coloured_;
+  std::unique_ptr<TruncatedLinearCycle<d>> fine_cycle_;
   int rebuilds0_ = 0;
   double rebuild_seconds0_ = 0;
 };

@@ -7,10 +7,26 @@
 #include <algorithm>
 #include "mg/bound_restriction.hpp"
 #include "mg/hierarchy.hpp"
+#include "mg/line_smoother.hpp"
 
 namespace cmg {
 
 enum class CycleType : int { V = 0, W = 1, F = 2 };
+
+// The linear correction of a TNNMG step (steps/tnnmg_step.hpp): the coarse cycle alone (the fine
+// level smoothed only by the nonlinear sweeps), one truncated linear cycle on the fine level
+// (mg/truncated_linear_cycle.hpp), or PCG preconditioned by that cycle (mg/pcg.hpp).
+enum class LinearCorrection : int { Coarse = 0, Cycle = 1, Pcg = 2 };
+
+inline LinearCorrection parse_linear_correction(const std::string& s) {
+  if (s == "coarse") return LinearCorrection::Coarse;
+  if (s == "cycle") return LinearCorrection::Cycle;
+  if (s == "pcg") return LinearCorrection::Pcg;
+  throw InputError("unknown linear correction '" + s + "' (expected coarse, cycle or pcg)");
+}
+inline const char* linear_correction_name(LinearCorrection c) {
+  return c == LinearCorrection::Coarse ? "coarse" : c == LinearCorrection::Cycle ? "cycle" : "pcg";
+}
 
 struct CycleOptions {
   CycleType cycle = CycleType::V;
@@ -26,6 +42,10 @@ struct CycleOptions {
   // slower on one thread (neighbours of one colour are scattered: worse cache use) and the second
   // thread gained nothing under load (docs/scaling.md, benchmarks/parallel_bandwidth.py).
   Ordering ordering = Ordering::Lexicographic;
+  // TNNMG only: its linear correction, and whether that correction smooths by lines
+  // (mg/line_smoother.hpp) on the levels whose matrix has lines (elsewhere lines are points).
+  LinearCorrection linear = LinearCorrection::Pcg;
+  bool lines = true;
 };
 
 inline CycleType parse_cycle(const std::string& s) {
@@ -79,8 +99,10 @@ class CoarseCycle {
 
   // w = P~ c (w: fine level, n_fine * d, overwritten), c the multilevel correction for the fine
   // residual r, the truncation mask and the fine correction bounds [lo, hi] (ignored when !bounded).
+  // lines: line Gauss-Seidel on the unbounded levels that have lines (a linear cycle; the monotone
+  // cycle keeps its point sweeps).
   void correction(const CycleOptions& opt, const double* r_fine, const std::uint8_t* mask, const double* lo_f,
-                  const double* hi_f, bool bounded, double* w, Index n_fine) {
+                  const double* hi_f, bool bounded, double* w, Index n_fine, bool lines = false) {
     const int top = (int)lv_.size() - 1;
     if (top < 0) {  // a single level: the smoother alone
       std::fill(w, w + n_fine * d, 0.0);
@@ -93,6 +115,7 @@ class CoarseCycle {
     set_bounded(C, bounded);
     std::fill(C.x.begin(), C.x.end(), 0.0);
     cur_ = &orders(opt.ordering);
+    lines_ = lines;
     cycle(opt, top, opt.cycle);
     prolongate<d>(P, mask, C.x.data(), w);
   }
@@ -121,6 +144,8 @@ class CoarseCycle {
     const auto& M = H_.level(l);
     if (L.any_bounds)
       projected_gs_sweep<d>(M.A, M.Dinv, L.bounded, M.inert, L.lo.data(), L.hi.data(), L.b.data(), L.x.data(), forward, order);
+    else if (lines_ && M.lines.has_lines() && order.all() && !order.coloured())
+      M.factored_lines().sweep(M.A, M.active.data(), L.b.data(), L.x.data(), forward);
     else
       block_gs_sweep<d>(M.A, M.Dinv, L.b.data(), L.x.data(), forward, order);
   }
@@ -191,6 +216,7 @@ class CoarseCycle {
   std::vector<SweepOrder> order_, coloured_;
   SweepOrder coarsest_all_;                      // every row of the coarsest level, coloured
   const std::vector<SweepOrder>* cur_ = nullptr;  // the orders of the cycle under way
+  bool lines_ = false;                            // line sweeps in the cycle under way
   std::vector<Vectors> lv_;
   std::vector<double> scratch_lo_, scratch_hi_;
 };

@@ -8,6 +8,7 @@
 #include <Eigen/SparseCore>
 #include "mg/galerkin.hpp"
 #include "mg/level_smoothers.hpp"
+#include "mg/line_smoother.hpp"
 
 namespace cmg {
 
@@ -19,6 +20,21 @@ class GalerkinHierarchy {
     std::vector<double> Dinv;
     std::vector<std::uint8_t> inert;
     double scale = 0;  // largest diagonal entry at the last full rebuild
+    // line Gauss-Seidel of the level: lines found at the first build, from the untruncated
+    // Galerkin matrix; factored on first use after the matrix changed (a monotone cycle, which
+    // keeps point sweeps, never pays for it), with the non-inert dofs active
+    mutable LineGaussSeidel<d> lines;
+    mutable std::vector<std::uint8_t> active;
+    mutable bool lines_stale = true;
+    const LineGaussSeidel<d>& factored_lines() const {
+      if (lines_stale) {
+        active.resize(inert.size());
+        for (std::size_t k = 0; k < inert.size(); ++k) active[k] = !inert[k];
+        lines.factor(A, active.data());
+        lines_stale = false;
+      }
+      return lines;
+    }
   };
 
   // P[l] prolongs level l to level l+1; P.back() ends on the fine level.
@@ -39,7 +55,7 @@ class GalerkinHierarchy {
   double rebuild_seconds() const { return rebuild_seconds_; }
   std::size_t memory_bytes() const {
     std::size_t s = 0;
-    for (auto& L : lv_) s += L.A.memory_bytes() + sizeof(double) * L.Dinv.size();
+    for (auto& L : lv_) s += L.A.memory_bytes() + sizeof(double) * L.Dinv.size() + L.lines.memory_bytes() + L.active.size();
     for (auto& P : P_) s += P.memory_bytes();
     return s;
   }
@@ -56,11 +72,14 @@ class GalerkinHierarchy {
       lv_[l].scale = max_diagonal<d>(lv_[l].A);
       invert_diagonal<d>(lv_[l].A, lv_[l].Dinv, lv_[l].inert, lv_[l].scale);
       if (slot_[l].size() != lv_[l].A.indices.size()) slot_[l].assign(lv_[l].A.indices.size(), -1);
+      if (!lines_found_) lv_[l].lines = LineGaussSeidel<d>(find_lines<d>(lv_[l].A));
     }
+    lines_found_ = true;
     if (!hessian.empty()) {
       for (const auto& [i, H] : hessian) add_fine_diagonal(i, H, mask);
       apply_deltas();
     }
+    for (int l = 0; l < nc; ++l) factor_lines(l);
     factorize_coarsest();
     ++rebuilds_;
     incremental_ = 0;
@@ -159,9 +178,13 @@ class GalerkinHierarchy {
         slot_[l][e.pos] = -1;
       }
       for (const auto& e : delta_[l]) invert_diagonal<d>(L.A, L.Dinv, L.inert, L.scale, e.i, e.i + 1);
+      if (!delta_[l].empty()) factor_lines(l);
       delta_[l].clear();
     }
   }
+
+  // the level's line factorization is out of date (refactored on its next use: O(rows))
+  void factor_lines(int l) { lv_[l].lines_stale = true; }
 
   void factorize_coarsest() {
     const BlockMatrix<d>& A = lv_[0].A;
@@ -208,6 +231,7 @@ class GalerkinHierarchy {
   std::vector<std::vector<Index>> slot_;        // position in A -> entry of delta_, or -1
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt_;
   int rebuilds_ = 0, incremental_ = 0;
+  bool lines_found_ = false;
   double rebuild_seconds_ = 0;
 };
 

@@ -31,6 +31,7 @@ struct CycleRecord {
   // energy by the correction and line search
   double step_size = std::numeric_limits<double>::quiet_NaN();
   double frozen_decrease = std::numeric_limits<double>::quiet_NaN();
+  int linear_iterations = 0;  // TNNMG: preconditioner applications (linear cycles) of the correction
 };
 
 // Where a solve spends its time (SolveResult::phase_seconds): a handful of clock reads per cycle.

@@ -4,8 +4,11 @@
 //   2. the law's linearization at the smoothed iterate u: truncation of active normals and
 //      sticking tangentials, friction gradient (and in 3D Hessian) of the sliding nodes with the
 //      bound s_p of u frozen, exactly as Algorithm 2 builds its coarse problem;
-//   3. ONE linear cycle of the coarse levels for that truncated Newton system -- no coarse
-//      obstacles; the correction w = P~ c;
+//   3. the linear correction w of that truncated Newton system -- no coarse obstacles -- as chosen
+//      by CycleOptions::linear: PCG preconditioned by the truncated linear cycle on the fine level
+//      (the default: line sweeps where the matrix has lines, mg/truncated_linear_cycle.hpp and
+//      mg/pcg.hpp), one such cycle, or one cycle of the coarse levels alone (w = P~ c: the fine
+//      level then smoothed only by the nonlinear sweeps, as first built);
 //   4. w projected node-wise onto the admissible set (u_n + w_n <= g_p at inactive nodes);
 //   5. the exact line search of the frozen-bound energy along w (frozen_line_search.hpp);
 //   6. nu2 sweeps.
@@ -19,6 +22,8 @@
 // steps 3-5, computed from the vectors (not from the 1D formula), and the step length.
 #pragma once
 #include "mg/cycle.hpp"
+#include "mg/pcg.hpp"
+#include "mg/truncated_linear_cycle.hpp"
 #include "solver/monitor.hpp"
 #include "steps/fine_iterate.hpp"
 #include "steps/frozen_line_search.hpp"
@@ -27,14 +32,23 @@
 
 namespace cmg {
 
+// The PCG of the linear correction stops when its energy decrease per iteration has fallen to
+// kLinearReduction^2 of the first (the correction's energy error down by about kLinearReduction:
+// a tenth, what one V-cycle gives on the Hertz benchmark, so a good cycle costs two applications
+// and a poor one -- nu -> 1/2, stretched elements -- as many as it needs, up to kMaxLinearIterations).
+constexpr double kLinearReduction = 0.1;
+constexpr int kMaxLinearIterations = 20;
+
 template <int d, class L>
 class TnnmgStep {
   using Smoother = NonlinearGaussSeidel<d, L>;
 
  public:
   TnnmgStep(const ContactProblem<d>& P, GalerkinHierarchy<d>& H, CoarseCycle<d>& C, BuiltLinearization<d>& built,
-            FineIterate<d>& it, const CycleOptions& opt, const SweepOrder& fine_order = SweepOrder())
-      : P_(P), H_(H), C_(C), built_(built), it_(it), opt_(opt), order_(fine_order), checks_(P, H, C, built, it, opt, fine_order) {
+            FineIterate<d>& it, const CycleOptions& opt, TruncatedLinearCycle<d>& fine_cycle,
+            const SweepOrder& fine_order = SweepOrder())
+      : P_(P), H_(H), C_(C), built_(built), it_(it), opt_(opt), lin_(fine_cycle), order_(fine_order),
+        checks_(P, H, C, built, it, opt, fine_order) {
     const Index n = P.num_nodes() * d;
     mask_ = P.base_mask();
     r_.assign(n, 0.0); w_.assign(n, 0.0); Aw_.assign(n, 0.0); old_.assign(n, 0.0); tmp_.assign(n, 0.0);
@@ -61,11 +75,10 @@ class TnnmgStep {
       built_.hessian = hessian_;
     }
     pc.lap(Phase::CoarseUpdate);
-    C_.correction(opt_, r_.data(), mask_.data(), lo_.data(), hi_.data(), false, w_.data(), P_.num_nodes());
-    const double e_before = frozen_energy(u.data(), tmp_.data());
+    linear_correction();
     step_ = line_search();
+    decrease_ = frozen_decrease(u.data(), tmp_.data(), step_);
     for (std::size_t k = 0; k < u.size(); ++k) { u[k] += step_ * w_[k]; tmp_[k] += step_ * Aw_[k]; }
-    decrease_ = e_before - frozen_energy(u.data(), tmp_.data());
     pc.lap(Phase::CoarseCorrection);
     for (int s = 0; s < opt_.nu2; ++s) Smoother::sweep(P_, u.data(), false, order_);
     pc.lap(Phase::PostSmooth);
@@ -81,6 +94,7 @@ class TnnmgStep {
     checks_.record(rec);
     rec.step_size = step_;
     rec.frozen_decrease = decrease_;
+    rec.linear_iterations = linear_iterations_;
   }
   double error_against(const double* ref) { return checks_.error_against(ref); }
   double sweep_change() { return checks_.sweep_change(); }
@@ -100,6 +114,28 @@ class TnnmgStep {
                            hi_.data() + k, &Hc);
       if (!Hc.isZero(0.0)) hessian_.emplace_back(i, Hc);
     }
+  }
+
+  // w_ for the truncated Newton system K w = M r (r_ with the friction gradient): see the top
+  void linear_correction() {
+    const Index n = (Index)w_.size();
+    if (opt_.linear == LinearCorrection::Coarse) {
+      C_.correction(opt_, r_.data(), mask_.data(), lo_.data(), hi_.data(), false, w_.data(), P_.num_nodes(), opt_.lines);
+      linear_iterations_ = 1;
+      return;
+    }
+    lin_.set_linearization(mask_.data(), hessian_, opt_.lines);
+    parallel_for(n, [&](Index k) { Aw_[k] = mask_[k] * r_[k]; });  // Aw_: the masked right-hand side here
+    if (opt_.linear == LinearCorrection::Cycle) {
+      lin_.apply(C_, opt_, Aw_.data(), w_.data());
+      linear_iterations_ = 1;
+      return;
+    }
+    const PcgReport rep = pcg(
+        n, [&](const double* x, double* y) { lin_.multiply(x, y); },
+        [&](const double* res, double* z) { lin_.apply(C_, opt_, res, z); }, Aw_.data(), w_.data(), kMaxLinearIterations,
+        kLinearReduction);
+    linear_iterations_ = rep.iterations;
   }
 
   // Projects w onto {u_n + w_n <= g} node-wise, then the exact step length along it (w_, Aw_ set).
@@ -127,17 +163,23 @@ class TnnmgStep {
     return ls_.minimize();
   }
 
-  // J_s(v) with the frozen bounds, from v and A v (Dirichlet offset left out: it cancels)
-  double frozen_energy(const double* v, const double* Av) const {
+  // J_s(u) - J_s(u + t w) with the frozen bounds, from the vectors u, A u, w, A w as the sum of its
+  // parts -t w^T (A u - f) - t^2/2 w^T A w - sum_p s_p (|u_T + t w_T| - |u_T|): no cancellation of two
+  // whole energies, whose round-off (1e-14 of the energy) exceeded the decrease once PCG had made the
+  // steps small (the Dirichlet offset cancels)
+  double frozen_decrease(const double* u, const double* Au, double t) const {
     const std::vector<double>& f = P_.load();
-    double e = 0;
-    for (std::size_t k = 0; k < f.size(); ++k) e += 0.5 * v[k] * Av[k] - f[k] * v[k];
+    double lin = 0, quad = 0;
+    for (std::size_t k = 0; k < f.size(); ++k) { lin += w_[k] * (Au[k] - f[k]); quad += w_[k] * Aw_[k]; }
+    double fr = 0;
     if constexpr (L::has_contact)
       for (Index c = 0; c < P_.num_contact(); ++c) {
         const Index k = P_.contact_node(c) * d;
-        e += s_[c] * free_tangential_norm<d>(v + k, P_.node(c).free);
+        if (s_[c] == 0) continue;
+        Vec<d> v = CVecMap<d>(u + k) + t * CVecMap<d>(w_.data() + k);
+        fr += s_[c] * (free_tangential_norm<d>(v.data(), P_.node(c).free) - free_tangential_norm<d>(u + k, P_.node(c).free));
       }
-    return e;
+    return -(t * lin + 0.5 * t * t * quad + fr);
   }
 
   const ContactProblem<d>& P_;
@@ -146,6 +188,7 @@ class TnnmgStep {
   BuiltLinearization<d>& built_;
   FineIterate<d>& it_;
   CycleOptions opt_;
+  TruncatedLinearCycle<d>& lin_;
   // energy record, error and the sweep check are the monotone step's (same iterate, same law)
   const SweepOrder& order_;  // of the fine nonlinear sweeps
   MonotoneMultigridStep<d, L> checks_;
@@ -154,6 +197,7 @@ class TnnmgStep {
   std::vector<double> r_, w_, Aw_, old_, tmp_, lo_, hi_, s_;
   std::vector<std::pair<Index, Mat<d>>> hessian_;
   double step_ = 0, decrease_ = 0;
+  int linear_iterations_ = 0;
 };
 
 }  // namespace cmg

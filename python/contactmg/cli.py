@@ -130,6 +130,9 @@ def _parser() -> argparse.ArgumentParser:
     h.add_argument("--nu1", type=_positive_int("--nu1", 0, 100), default=3)
     h.add_argument("--nu2", type=_positive_int("--nu2", 0, 100), default=3)
     h.add_argument("--hierarchy", choices=["uniform", "adaptive"], default="uniform")
+    h.add_argument("--linear", choices=["pcg", "cycle", "coarse"], default=None,
+                   help="the linear correction of --method tnnmg (default pcg: conjugate gradients with the "
+                        "line-smoothed truncated linear cycle; coarse: the coarse levels alone)")
     add_thread_options(h)
     h.add_argument("--json", type=_writable, metavar="PATH|-")
     h.add_argument("--vtu", type=_with_suffix("--vtu", (".vtu",)), metavar="PATH")
@@ -189,6 +192,9 @@ def hertz_report(args, problem, result) -> dict:
         "threads": result.extra.get("threads"), "ordering": result.extra.get("ordering"),
         "hierarchy": problem.hierarchy.kind,
     }
+    if args.method == "tnnmg" and "linear_iterations" in result.history:  # issue 14: its linear correction
+        out["linear_correction"] = getattr(args, "linear", None) or "pcg"
+        out["linear_cycles"] = int(sum(result.history["linear_iterations"]))
     if problem.hierarchy.estimated_error:
         out["estimated_error"] = [float(e) for e in problem.hierarchy.estimated_error]
     ref = result.extra.get("reference")
@@ -213,6 +219,8 @@ def run_hertz(args) -> int:
     from .hertz import hertz_problem
 
     cli_path.check(args)
+    if args.linear is not None and args.method != "tnnmg":
+        raise ValueError("--linear chooses the linear correction of --method tnnmg")
     problem = hertz_problem(args.cell, args.levels, args.friction, coulomb_at_zero=args.method == "fixed-point",
                             cycle=args.cycle, nu1=args.nu1, nu2=args.nu2, hierarchy=args.hierarchy)
     if cli_path.wanted(args):
@@ -222,8 +230,9 @@ def run_hertz(args) -> int:
         path = cli_path.solve(args, problem, [HERTZ_TOP], (0.0, TOP_DISPLACEMENT), (args.shear or 0.0, 0.0))
         result = path.last
     else:
+        extra = {} if args.linear is None else {"linear": args.linear}
         result = problem.solve(args.method, tol=args.tol, max_cycles=args.max_cycles, threads=args.threads,
-                               ordering=args.ordering)
+                               ordering=args.ordering, **extra)
     report = hertz_report(args, problem, result)
     if cli_path.wanted(args):
         cli_path.report(args, path, report)

@@ -32,6 +32,9 @@ SOLVE_TAKES_THREADS = "threads" in (_core.ContactSolver2D.solve.__doc__ or "")
 SOLVE_TAKES_FIXED_POINT_STALL = "fixed_point_stall_window" in (_core.ContactSolver2D.solve.__doc__ or "")
 ORDERINGS = ("coloured", "lexicographic")
 CORE_TAKES_MATRIX = "take_matrix" in (_core.ContactSolver2D.__init__.__doc__ or "")
+# Issue 14: the linear correction of tnnmg per solve (PCG / one cycle / coarse levels only; line smoothing)
+SOLVE_TAKES_LINEAR = "linear (tnnmg)" in (_core.ContactSolver2D.solve.__doc__ or "")
+LINEAR_CORRECTIONS = ("pcg", "cycle", "coarse")
 
 
 def tag_tuple(tags, name: str) -> tuple:
@@ -393,7 +396,8 @@ class ContactProblem:
               error_reference: Optional[np.ndarray] = None, cycle: Optional[str] = None,
               nu1: Optional[int] = None, nu2: Optional[int] = None,
               progress: Optional[Callable[[dict], None]] = None, threads: int = 0,
-              ordering: Optional[str] = None, fixed_point_stall_window: int = 0) -> ContactResult:
+              ordering: Optional[str] = None, fixed_point_stall_window: int = 0,
+              linear: Optional[str] = None, lines: Optional[bool] = None) -> ContactResult:
         """Solve with `method`: "nmg" (Algorithm 2 for Coulomb; truncated monotone multigrid for
         frictionless and Tresca; linear multigrid without contact), "tnnmg" (truncated nonsmooth
         Newton multigrid: the fine nonlinear sweeps, one linear cycle for the truncated Newton
@@ -431,6 +435,12 @@ class ContactProblem:
             raise ValueError(f"threads must be an integer in 0..4096 (0: all cores), got {threads!r}")
         if ordering is not None and ordering not in ORDERINGS:
             raise ValueError(f"ordering must be one of {ORDERINGS}, got {ordering!r}")
+        if (linear is not None or lines is not None) and method != "tnnmg":
+            raise ValueError("linear and lines choose the linear correction of method 'tnnmg'")
+        if linear is not None and linear not in LINEAR_CORRECTIONS:
+            raise ValueError(f"linear must be one of {LINEAR_CORRECTIONS}, got {linear!r}")
+        if lines is not None and not isinstance(lines, (bool, np.bool_)):
+            raise ValueError(f"lines must be True or False, got {lines!r}")
         kw = dict(tol=float(tol), rtol=float(rtol), max_cycles=int(max_cycles), fixed_point_tol=float(fixed_point_tol),
                   fixed_point_max=int(fixed_point_max), reference=error_reference)
         if SOLVE_TAKES_THREADS:
@@ -458,6 +468,10 @@ class ContactProblem:
                 if not SOLVE_TAKES_CYCLE_OPTIONS:
                     raise ValueError("method 'tnnmg' needs the redesigned core (issue 9)")
                 kw["tnnmg"] = True
+                if linear is not None or lines is not None:
+                    if not SOLVE_TAKES_LINEAR:
+                        raise ValueError("linear= and lines= need a core with the robust linear corrections (issue 14)")
+                    kw.update(linear=linear, lines=None if lines is None else bool(lines))
             return self._result(solver.solve(u0, **kw), method, options)
         if reference is None:
             reference = self.solve("nmg", tol=tol, rtol=rtol, max_cycles=max_cycles, cycle=options.cycle,
