@@ -344,7 +344,10 @@ void bind_dim(py::module_& m) {
       .def("fine_matrix", [](const CS& S) { return std::make_shared<BM>(S.fine_matrix()); })
       .def("memory_bytes", &CS::memory_bytes)
       .def_property_readonly("num_colours", &CS::num_fine_colours, "colours of the fine block graph (coloured sweeps)")
-      .def("rebuild_coarse", &CS::rebuild_coarse, "Full Galerkin rebuild of the coarse matrices for the current truncation");
+      .def("rebuild_coarse", &CS::rebuild_coarse, "Full Galerkin rebuild of the coarse matrices for the current truncation")
+      .def("enable_tied_correction", &CS::enable_tied_correction,
+           "after each nmg coarse correction a second one, without bounds, with every contact dof frozen (two bodies)")
+      .def_property_readonly("tied_correction", &CS::tied_correction);
 
   m.def(("solve_node_tresca_" + sfx).c_str(), [](DArr B, DArr b, double g, double s, int free) {
     require_shape(B, "B", {d, d}); require_shape(b, "b", {d});

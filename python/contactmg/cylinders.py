@@ -41,7 +41,8 @@ def lower_half_disk(segments: int = 5) -> Mesh:
 
 
 def cylinders_problem(levels: int = 5, friction: float = 0.0, E2: float = E, nu2: float = NU, coulomb_at_zero=False,
-                      cycle: str = "F", smooth: int = 3, upper_segments: int = 4, lower_segments: int = 5) -> TwoBodyProblem:
+                      cycle: str = "F", smooth: int = 3, upper_segments: int = 4, lower_segments: int = 5,
+                      tied_correction: bool = True) -> TwoBodyProblem:
     if isinstance(friction, bool) or not isinstance(friction, (int, float)) or not math.isfinite(friction) or friction < 0:
         raise ValueError(f"the friction coefficient must be a finite number >= 0, got {friction!r}")
     upper = MeshHierarchy.build(polar_half_disk((0.0, 0.4), RADIUS, rings=3, segments=upper_segments), levels,
@@ -51,7 +52,7 @@ def cylinders_problem(levels: int = 5, friction: float = 0.0, E2: float = E, nu2
               Body(lower, Material(E2, nu2), [Dirichlet([HERTZ_TOP], (0.0, FACE_DISPLACEMENT))])]
     pair = ContactPair(0, 1, [HERTZ_ARC], [HERTZ_ARC], search=SEARCH, region=lambda mid: np.abs(mid[:, 0]) < ZONE)
     law = Coulomb(friction) if (friction > 0 or coulomb_at_zero) else Frictionless()
-    p = TwoBodyProblem(bodies, pair, law, cycle=cycle, nu1=smooth, nu2=smooth)
+    p = TwoBodyProblem(bodies, pair, law, cycle=cycle, nu1=smooth, nu2=smooth, tied_correction=tied_correction)
     p.benchmark = "hertz"  # zones centred on x = 0
     return p
 

@@ -93,12 +93,15 @@ class MultiBodyProblem(ContactProblem):
     bodies' coarse unknowns, and the monotone bound restriction bounds each body's unknowns by a
     part of the slack: a common motion of the bodies at the edge of the contact zone, which leaves
     the slack unchanged, is cut as if it closed the gap. With unequal materials the interface has
-    to settle by such a motion, and Algorithm 2 ("nmg") needs more cycles on finer levels; "tnnmg"
-    (a linear coarse correction, projected and line-searched, no restricted bounds) does not
+    to settle by such a motion, and Algorithm 2 alone needed more cycles on finer levels (17 -> 30
+    over levels 3-6 for E2 = 2 E1). `tied_correction` (the default) adds after each coarse
+    correction of "nmg" and "fixed-point" a second one without bounds in the space where every
+    contact dof (relative displacement) is frozen: the common motions (cpp/steps/tied_correction.hpp).
+    "tnnmg" (a linear coarse correction, projected and line-searched) needs no such help
     (issue 13, benchmarks/two_body_levels.py)."""
 
     def __init__(self, bodies: Sequence[Body], pairs: Sequence[ContactPair], friction=None, cycle: str = "F",
-                 nu1: int = 3, nu2: int = 3):
+                 nu1: int = 3, nu2: int = 3, tied_correction: bool = True):
         t0 = time.perf_counter()
         bodies = list(bodies)
         if len(bodies) < 2 or not all(isinstance(b, Body) for b in bodies):
@@ -112,6 +115,9 @@ class MultiBodyProblem(ContactProblem):
         friction = Frictionless() if friction is None else friction
         if not isinstance(friction, (Frictionless, Tresca, Coulomb)):
             raise TypeError("friction must be Frictionless(), Tresca(bound) or Coulomb(F)")
+        if not isinstance(tied_correction, (bool, np.bool_)):
+            raise TypeError(f"tied_correction must be True or False, got {tied_correction!r}")
+        self.tied_correction = bool(tied_correction)
         levels = {b.hierarchy.levels for b in bodies}
         if len(levels) != 1:
             raise ValueError(f"the bodies' hierarchies need the same number of levels, got {sorted(levels)}")
@@ -253,10 +259,15 @@ class MultiBodyProblem(ContactProblem):
         # the transformed matrix stays here (take_matrix is declined): it is what checks and reports multiply with
         c = self.contact
         values = self.fixed_values if fixed_values is None else fixed_values
-        return _core.ContactSolver2D(self.A, self.load if load is None else load, self.fixed, values,
-                                     c.nodes, c.normals, c.gaps, self.coefficients, law,
-                                     [t.as_tuple() for t in self.transfers], options.cycle, options.nu1, options.nu2,
-                                     frame_fixed=frame_fixed, frame_values=frame_values)
+        solver = _core.ContactSolver2D(self.A, self.load if load is None else load, self.fixed, values,
+                                       c.nodes, c.normals, c.gaps, self.coefficients, law,
+                                       [t.as_tuple() for t in self.transfers], options.cycle, options.nu1, options.nu2,
+                                       frame_fixed=frame_fixed, frame_values=frame_values)
+        if self.tied_correction and law != "linear":
+            if not hasattr(solver, "enable_tied_correction"):
+                raise ValueError("tied_correction needs a core with enable_tied_correction (rebuild the core)")
+            solver.enable_tied_correction()
+        return solver
 
     def _result(self, raw: dict, method: str, options: CycleOptions):
         raw = dict(raw)
@@ -278,11 +289,11 @@ class TwoBodyProblem(MultiBodyProblem):
     """Two (or more) bodies through one mortar pair (or a sequence of pairs): MultiBodyProblem."""
 
     def __init__(self, bodies: Sequence[Body], pair: ContactPair, friction=None, cycle: str = "F", nu1: int = 3,
-                 nu2: int = 3):
+                 nu2: int = 3, tied_correction: bool = True):
         if not isinstance(pair, ContactPair) and not (isinstance(pair, (list, tuple))
                                                       and all(isinstance(q, ContactPair) for q in pair)):
             raise TypeError("pair must be a ContactPair")
-        super().__init__(bodies, pair, friction, cycle, nu1, nu2)
+        super().__init__(bodies, pair, friction, cycle, nu1, nu2, tied_correction)
 
 
 def _union_mesh(meshes: Sequence[Mesh], offsets: np.ndarray) -> Mesh:
