@@ -1,16 +1,17 @@
 """Issue-13 tables for `contactmg cylinders` (two half-disks, dual mortar, non-matching meshes).
 
-cycles: nmg (Algorithm 2) and tnnmg cycles per level and F, equal (E2 = 2000, nu2 = 0.28) and
-unequal (E2 = 4000, nu2 = 0.2) materials, with the cycles of the linear problem whose contact state
-is known ("lin", the coarse space's own rate).
+cycles: nmg (Algorithm 2 with the tied coarse correction, the default), nmg without it and tnnmg
+cycles per level and F, equal (E2 = 2000, nu2 = 0.28) and unequal (E2 = 4000, nu2 = 0.2) materials,
+with the cycles of the linear problem whose contact state is known ("lin", the coarse space's own
+rate).
 hertz: per level, the half-width and peak pressure against the two-body Hertz formulas, by three
 evaluations: the last contact node / the largest nodal multiplier (the contract's keys), the
 ellipse fitted to all contact nodes (hertz_fit.py), the second moment of the nodal forces
 (a = 2 sqrt(sum f x^2 / sum f), exact for the Hertz profile); time against the one-body Hertz
 problem of the same level.
-bounds: the diagnosis of nmg's growth: the mortar body's coarse unknowns scaled by alpha in the
-finest prolongation (the same coarse space, another split of each slack between the two bodies
-in the monotone bound restriction).
+bounds: the diagnosis of nmg's growth without the tied correction: the mortar body's coarse
+unknowns scaled by alpha in the finest prolongation (the same coarse space, another split of each
+slack between the two bodies in the monotone bound restriction).
 
     python benchmarks/two_body_levels.py cycles --levels 3 4 5 6 [--json out.json]
     python benchmarks/two_body_levels.py hertz --levels 5 6 7 8 [--json out.json]
@@ -35,16 +36,20 @@ MATERIALS = {"equal": (2000.0, 0.28), "unequal": (4000.0, 0.2)}
 def cycles(levels, out):
     for name, (E2, nu2) in MATERIALS.items():
         for F in (0.0, 0.4, 2.0):
-            row = {"materials": name, "E2": E2, "nu2": nu2, "F": F, "nmg": [], "tnnmg": [], "lin": []}
-            for method in ("nmg", "tnnmg"):
+            row = {"materials": name, "E2": E2, "nu2": nu2, "F": F, "nmg": [], "nmg_untied": [], "tnnmg": [], "lin": [],
+                   "nmg_seconds_per_cycle": [], "nmg_untied_seconds_per_cycle": []}
+            for method, tied in (("nmg", True), ("nmg_untied", False), ("tnnmg", True)):
                 for L in levels:
-                    p = cylinders_problem(levels=L, friction=F, E2=E2, nu2=nu2)
-                    r = p.solve(method)
+                    p = cylinders_problem(levels=L, friction=F, E2=E2, nu2=nu2, tied_correction=tied)
+                    r = p.solve(method.split("_")[0])
                     row[method].append(r.cycles if r.converged else None)
+                    if method.startswith("nmg"):
+                        row[method + "_seconds_per_cycle"].append(r.solve_seconds / r.cycles)
                     if method == "nmg":
                         row["lin"].append(p.solve("linear", reference=r).cycles)
             out.append(row)
-            print(f"{name:8s} F={F:<4} nmg {row['nmg']} tnnmg {row['tnnmg']} lin {row['lin']}", flush=True)
+            print(f"{name:8s} F={F:<4} nmg {row['nmg']} (without the tied correction {row['nmg_untied']}) tnnmg "
+                  f"{row['tnnmg']} lin {row['lin']}", flush=True)
 
 
 def _evaluate(x, f, lam, active, a, p0):
@@ -96,7 +101,7 @@ def bounds(levels, out, alphas=(0.5, 1.0, 2.0, 4.0, 10.0)):
     for L in levels:
         row = {"level": L}
         for a in alphas:
-            p = cylinders_problem(levels=L, friction=0.0, E2=E2, nu2=nu2)
+            p = cylinders_problem(levels=L, friction=0.0, E2=E2, nu2=nu2, tied_correction=False)
             P = p.transfers[-1].matrix().tocsr()
             scale = np.ones(P.shape[1])
             scale[p.bodies[0].hierarchy.meshes[-2].num_points:] = a  # the mortar body's coarse unknowns
