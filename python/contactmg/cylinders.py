@@ -84,7 +84,7 @@ def add_parser(sub):
                    help="levels in all; level 1 is the coarse mesh")
     c.add_argument("--friction", type=nonneg_float("--friction"), default=0.0)
     c.add_argument("--method", choices=["nmg", "fixed-point", "linear", "tnnmg"], default="nmg",
-                   help="tnnmg: cycle counts flat over the levels also for unequal materials (issue 13)")
+                   help="nmg: Algorithm 2 with the tied coarse correction of two bodies; tnnmg: truncated nonsmooth Newton multigrid")
     c.add_argument("--E2", type=nonneg_float("--E2", positive=True), default=E, help="Young's modulus of the lower body")
     c.add_argument("--nu2", type=float, default=NU, help="Poisson's ratio of the lower body")
     c.add_argument("--tol", type=nonneg_float("--tol", positive=True), default=1e-11)

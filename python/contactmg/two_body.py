@@ -2,9 +2,10 @@
 transformation of Wohlmuth & Krause (2003).
 
 The bodies are assembled one by one (each a ContactProblem without contact: its own hierarchy,
-material, Dirichlet data and loads) into a block-diagonal A. One contact pair couples the
+material, Dirichlet data and loads) into a block-diagonal A. Each contact pair couples the
 nonmortar boundary of one body with the mortar boundary of another (mortar.py). The change of
-basis u = T w, T = I + N (N = D^{-1} M on the nonmortar contact rows and mortar columns), makes the
+basis u = T w, T = I + N (N = D^{-1} M on the nonmortar contact rows and mortar columns of every
+pair), makes the
 nonmortar unknowns the relative displacements w_p = u_p - (D^{-1} M u_m)_p, and the coupled
 conditions nodal: the core then solves the problem T^T A T, T^T f with its own nodal solvers,
 truncation and monotone multigrid, in the nodal frames of the nonmortar normals. T^{-1} = I - N
@@ -13,7 +14,8 @@ scalar interpolation (weights may be negative), and each body keeps its own coar
 coarse spaces are the union of the two bodies' coarse spaces, coupled only through the
 transformed fine level, where the Galerkin products T^{-1}P^T (T^T A T) T^{-1}P = P^T A P are the
 untransformed, uncoupled ones plus the truncation. The friction law acts on the tangential part of
-w: the relative tangential displacement.
+w: the relative tangential displacement. A second coarse correction with every contact dof frozen
+(the tied correction, MultiBodyProblem) moves touching bodies together.
 """
 from __future__ import annotations
 
