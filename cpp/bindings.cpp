@@ -389,7 +389,10 @@ void bind_dim(py::module_& m) {
                out.append(to_numpy(std::vector<Index>(L.nodes.begin() + L.ptr[k], L.nodes.begin() + L.ptr[k + 1]),
                                    {(py::ssize_t)(L.ptr[k + 1] - L.ptr[k])}));
              return out;
-           }, py::arg("level"), "the lines of coarse level `level` (node ids in chain order)");
+           }, py::arg("level"), "the lines of coarse level `level` (node ids in chain order)")
+      .def("enable_tied_correction", &CS::enable_tied_correction,
+           "after each nmg coarse correction a second one, without bounds, with every contact dof frozen (two bodies)")
+      .def_property_readonly("tied_correction", &CS::tied_correction);
 
   m.def(("line_gauss_seidel_" + sfx).c_str(), [](const BM& A, DArr b, DArr x0, int sweeps, py::object active) {
     if (A.rows != A.cols) throw InputError("the matrix must be square");

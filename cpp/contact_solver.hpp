@@ -3,6 +3,7 @@
 // monotone multigrid and fixed-point steps (steps/), the loop with its stop rules and the monitor
 // (solver/) -- for the law chosen at run time (laws/law.hpp turns it into a type once per call).
 #pragma once
+#include <memory>
 #include "laws/law.hpp"
 #include "steps/fixed_point_step.hpp"
 #include <memory>
@@ -42,12 +43,21 @@ class ContactSolver {
   Monitor& monitor() { return mon_; }
   std::size_t memory_bytes() const {
     return P_.memory_bytes() + H_.memory_bytes() + C_.memory_bytes() + sizeof(double) * 8 * P_.num_nodes() * d +
-           sizeof(Index) * fine_coloured_.rows().size() + (fine_cycle_ ? fine_cycle_->memory_bytes() : 0);
+           sizeof(Index) * fine_coloured_.rows().size() + (fine_cycle_ ? fine_cycle_->memory_bytes() : 0) +
+           (tied_ ? tied_->memory_bytes() : 0);
   }
   // Load paths: friction on the slip increment from the canonical displacement u_prev (nullptr: none).
   void set_slip_origin(const double* u_prev) { P_.set_slip_origin(u_prev); }
   bool has_slip_origin() const { return P_.has_slip_origin(); }
   Index num_fine_colours() { return fine_order(Ordering::Coloured).num_colours(); }
+  // A second, bounds-free coarse correction with every contact dof frozen after each coarse
+  // correction of the nmg and fixed-point methods (steps/tied_correction.hpp; two bodies).
+  void enable_tied_correction() {
+    std::vector<BlockMatrix<d>> P;
+    for (int l = 0; l < H_.num_coarse_levels(); ++l) P.push_back(H_.prolongation(l));
+    tied_ = std::make_unique<TiedCorrection<d>>(P_, std::move(P));
+  }
+  bool tied_correction() const { return (bool)tied_; }
   // Full Galerkin rebuild for the current linearization (diagnostics: compare with the incremental one).
   void rebuild_coarse() { H_.rebuild(P_.matrix(), built_.mask.data(), built_.hessian); }
 
@@ -58,7 +68,7 @@ class ContactSolver {
       start(u0);
       P_.set_bounds_to_coefficients();
       SolveResult R;
-      MonotoneMultigridStep<d, Law> step(P_, H_, C_, built_, it_, cyc, fine_order(cyc.ordering));
+      MonotoneMultigridStep<d, Law> step(P_, H_, C_, built_, it_, cyc, fine_order(cyc.ordering), tied_.get());
       run_loop(step, opt, mon_, R, 0);
       finish<Law>(R);
       return R;
@@ -110,7 +120,7 @@ class ContactSolver {
     if (law_ != Law::Coulomb) throw InputError("the fixed-point iteration needs a Coulomb friction law");
     start(u0);
     SolveResult R;
-    MonotoneMultigridStep<d, law::Tresca> tresca(P_, H_, C_, built_, it_, cyc, fine_order(cyc.ordering));
+    MonotoneMultigridStep<d, law::Tresca> tresca(P_, H_, C_, built_, it_, cyc, fine_order(cyc.ordering), tied_.get());
     FixedPointStep<d> step(P_, tresca, it_);
     run_fixed_point(step, opt, mon_, R);
     finish<law::Coulomb>(R);
@@ -198,6 +208,7 @@ class ContactSolver {
   Monitor mon_;
   SweepOrder lexicographic_, fine_coloured_;
   std::unique_ptr<TruncatedLinearCycle<d>> fine_cycle_;
+  std::unique_ptr<TiedCorrection<d>> tied_;
   int rebuilds0_ = 0;
   double rebuild_seconds0_ = 0;
 };

@@ -11,6 +11,7 @@ from contactmg.cylinders import RADIUS, cylinders_problem, two_body_halfwidth, t
 from contactmg.friction import Coulomb, Frictionless
 from contactmg.generators import RECT_BOTTOM, RECT_TOP, rectangle
 from contactmg.hertz import hertz_problem
+from contactmg.hertz_fit import elliptic_fit
 from contactmg.hierarchy import MeshHierarchy
 from contactmg.material import Material
 from contactmg.mortar import mortar_coupling_2d
@@ -59,6 +60,16 @@ def test_mortar_on_curved_arcs_rows_sum_to_the_support():
     y_lower = -0.4 + np.sqrt(0.16 - x[:, 0] ** 2)
     assert np.allclose(c.gaps(p.parts[0].mesh.points, p.parts[1].mesh.points)[np.abs(x[:, 0]) < 0.05],
                        (x[:, 1] - y_lower)[np.abs(x[:, 0]) < 0.05], rtol=0.05, atol=1e-4)
+
+
+def test_mortar_on_mirror_node_arcs_stays_finite():
+    """Arcs whose nodes mirror each other (4 k segments on both bodies): pieces of the overlap a
+    round-off wide at segment ends once gave M a NaN at level 5 (a bounded ray test at their Gauss
+    points); the rows stay finite and sum to D."""
+    p = cylinders_problem(levels=5, friction=0.0, lower_segments=4)
+    c = p.coupling
+    assert np.isfinite(c.M.data).all() and c.covered.all()
+    assert np.allclose(np.asarray(c.M.sum(axis=1)).ravel(), c.D, rtol=1e-12, atol=0)
 
 
 def test_basis_transformation_and_its_inverse():
@@ -190,7 +201,9 @@ def test_sliding_blocks_every_node_at_the_coulomb_bound():
 
 def test_two_body_hertz_against_the_formulas_level5():
     """E2 != E1: the half-width within one arc segment and the peak pressure within 10 % of the
-    two-body formulas at level 5 (the finest-level comparison is in the report / slow test)."""
+    two-body formulas at level 5 by the contract's evaluations (last contact node, largest nodal
+    multiplier), within 5 % by the ellipse fitted to all contact nodes (measured -3.9 % / +3.0 %;
+    the finest-level comparison is in the slow test and benchmarks/two_body_levels.py)."""
     p = cylinders_problem(levels=5, friction=0.0, E2=4000.0, nu2=0.2)
     r = p.solve()
     assert r.converged
@@ -201,6 +214,21 @@ def test_two_body_hertz_against_the_formulas_level5():
     assert abs(r.contact_halfwidth - a) <= h_arc
     p0 = two_body_peak_pressure(load, RADIUS, RADIUS, m1, m2)
     assert abs(np.abs(r.normal_stress).max() - p0) <= 0.1 * p0
+    active = r.contact_state > 0
+    a_fit, p0_fit, centre = elliptic_fit(p.mesh.points[p.contact.nodes[active], 0], np.abs(r.normal_stress[active]))
+    assert abs(a_fit - a) <= 0.05 * a and abs(p0_fit - p0) <= 0.05 * p0
+    assert abs(centre) <= 1e-6 * a  # the problem is symmetric in x
+
+
+def test_elliptic_fit_recovers_a_sampled_hertz_profile():
+    """Pressures sampled from p0 sqrt(1 - ((x - c)/a)^2) at uneven nodes give a, p0, c back to round-off."""
+    rng = np.random.default_rng(4)
+    a, p0, c = 0.031, 143.0, 0.002
+    x = np.sort(rng.uniform(c - a, c + a, 9))
+    got = elliptic_fit(x, p0 * np.sqrt(1 - ((x - c) / a) ** 2))
+    assert np.allclose(got, (a, p0, c), rtol=1e-10, atol=1e-14)
+    assert all(np.isnan(elliptic_fit(x[:2], [1.0, 1.0])))  # too few nodes
+    assert all(np.isnan(elliptic_fit(x, 1.0 + x ** 2)))  # not an ellipse
 
 
 def _cli(*args, timeout=300):
@@ -223,6 +251,7 @@ def test_cli_cylinders_json_vtu(tmp_path):
     assert rep["hertz_p0"] == pytest.approx(2 * P / (np.pi * rep["hertz_halfwidth"]), rel=1e-12)
     m = meshio.read(vtu)
     assert set(np.unique(m.point_data["body_id"])) == {0, 1}
+    assert rep["fitted_halfwidth"] > 0 and rep["fitted_peak_pressure"] > 0
     assert len(m.points) == rep["nodes"]
 
 
@@ -246,8 +275,9 @@ def test_coarse_correction_rate_does_not_grow_with_the_level(F):
     """The coarse levels of the two bodies, coupled only through the transformed fine level
     (prolongation T^{-1} P): the asymptotic contraction per cycle and the cycles of the linear
     problem with the contact state known stay level-independent (measured 0.22-0.36, 17-22
-    cycles on levels 3-6). The nonlinear cycle counts do grow with E2 != E1 (17 -> 30 from level 3
-    to 6, a longer pre-asymptotic phase: the issue-13 report)."""
+    cycles on levels 3-6). Algorithm 2's cycle counts do grow with E2 != E1 (17 -> 30 from level 3
+    to 6): its restricted bounds hold back the common motion of the bodies at the zone edge
+    (two_body.py; tnnmg stays flat, tests/test_multi_body.py)."""
     rates, linear = [], []
     for L in (3, 4, 5, 6):
         p = cylinders_problem(levels=L, friction=F, E2=4000.0, nu2=0.2)
@@ -262,18 +292,25 @@ def test_coarse_correction_rate_does_not_grow_with_the_level(F):
 
 
 @pytest.mark.slow
-def test_two_body_hertz_level7_against_the_formulas():
-    """Level 7 (334,276 dofs), E2 = E1: half-width within one arc segment (3.5 % measured: the
-    largest |x| of a contact node) and peak pressure within 3 % (2.5 % measured)."""
-    p = cylinders_problem(levels=7, friction=0.0)
-    r = p.solve()
+@pytest.mark.parametrize("E2,nu2", [(2000.0, 0.28), (4000.0, 0.2)])
+def test_two_body_hertz_level7_against_the_formulas(E2, nu2):
+    """Level 7 (334,276 dofs): the Hertz ellipse fitted to all contact nodes within 3 % of the
+    two-body formulas (measured a -0.9 / -1.1 %, p0 +1.0 / +1.2 %; at level 8 -0.9 % and +1.1 % for
+    E2 = 4000: the ~1 % left is the finite radius, not the mesh); the contract's evaluations: the
+    last contact node within one arc segment (-3.5 / -3.1 % measured, segment 4.6 %) and the largest
+    nodal multiplier within 4 % (+2.6 / +3.5 %), both converging slowly (hertz_fit.py)."""
+    p = cylinders_problem(levels=7, friction=0.0, E2=E2, nu2=nu2)
+    r = p.solve("tnnmg")
     assert r.converged
     load = r.reaction[1]
-    m = p.bodies[0].material
-    a = two_body_halfwidth(load, RADIUS, RADIUS, m, m)
+    m1, m2 = p.bodies[0].material, p.bodies[1].material
+    a = two_body_halfwidth(load, RADIUS, RADIUS, m1, m2)
+    p0 = two_body_peak_pressure(load, RADIUS, RADIUS, m1, m2)
+    active = r.contact_state > 0
+    a_fit, p0_fit, _ = elliptic_fit(p.mesh.points[p.contact.nodes[active], 0], np.abs(r.normal_stress[active]))
+    assert abs(a_fit - a) <= 0.03 * a and abs(p0_fit - p0) <= 0.03 * p0
     assert abs(r.contact_halfwidth - a) <= np.pi * RADIUS / (12 * 2 ** 6)
-    p0 = two_body_peak_pressure(load, RADIUS, RADIUS, m, m)
-    assert abs(np.abs(r.normal_stress).max() - p0) <= 0.03 * p0
+    assert abs(np.abs(r.normal_stress).max() - p0) <= 0.04 * p0
 
 
 def test_two_body_bad_input_is_a_clear_error():

@@ -8,6 +8,7 @@
 #include "solver/monitor.hpp"
 #include "steps/fine_iterate.hpp"
 #include "steps/nonlinear_gauss_seidel.hpp"
+#include "steps/tied_correction.hpp"
 
 namespace cmg {
 
@@ -33,8 +34,9 @@ class MonotoneMultigridStep {
 
  public:
   MonotoneMultigridStep(const ContactProblem<d>& P, GalerkinHierarchy<d>& H, CoarseCycle<d>& C, BuiltLinearization<d>& built,
-                        FineIterate<d>& it, const CycleOptions& opt, const SweepOrder& fine_order = SweepOrder())
-      : P_(P), H_(H), C_(C), built_(built), it_(it), opt_(opt), order_(fine_order) {
+                        FineIterate<d>& it, const CycleOptions& opt, const SweepOrder& fine_order = SweepOrder(),
+                        TiedCorrection<d>* tied = nullptr)
+      : P_(P), H_(H), C_(C), built_(built), it_(it), opt_(opt), order_(fine_order), tied_(tied) {
     const Index n = P.num_nodes() * d;
     mask_ = P.base_mask();
     r_.assign(n, 0.0); w_.assign(n, 0.0); old_.assign(n, 0.0);
@@ -62,6 +64,7 @@ class MonotoneMultigridStep {
     pc.lap(Phase::CoarseUpdate);
     C_.correction(opt_, r_.data(), mask_.data(), lo_.data(), hi_.data(), bounded, w_.data(), P_.num_nodes());
     parallel_for((Index)u.size(), [&](Index k) { u[k] += w_[k]; });
+    if (tied_) tied_->apply(P_, opt_, u.data());  // two bodies: the common motions, no bounds
     pc.lap(Phase::CoarseCorrection);
     for (int s = 0; s < opt_.nu2; ++s) Smoother::sweep(P_, u.data(), false, order_);
     pc.lap(Phase::PostSmooth);
@@ -141,6 +144,7 @@ class MonotoneMultigridStep {
   FineIterate<d>& it_;
   CycleOptions opt_;
   const SweepOrder& order_;  // of the fine nonlinear sweeps
+  TiedCorrection<d>* tied_;   // or nullptr
   std::vector<std::uint8_t> mask_;
   // tmp_ shares w_'s storage: the coarse correction w is added to u before A (u - u_old) needs
   // the buffer (one fine vector less, issue 15)

@@ -2,9 +2,10 @@
 transformation of Wohlmuth & Krause (2003).
 
 The bodies are assembled one by one (each a ContactProblem without contact: its own hierarchy,
-material, Dirichlet data and loads) into a block-diagonal A. One contact pair couples the
+material, Dirichlet data and loads) into a block-diagonal A. Each contact pair couples the
 nonmortar boundary of one body with the mortar boundary of another (mortar.py). The change of
-basis u = T w, T = I + N (N = D^{-1} M on the nonmortar contact rows and mortar columns), makes the
+basis u = T w, T = I + N (N = D^{-1} M on the nonmortar contact rows and mortar columns of every
+pair), makes the
 nonmortar unknowns the relative displacements w_p = u_p - (D^{-1} M u_m)_p, and the coupled
 conditions nodal: the core then solves the problem T^T A T, T^T f with its own nodal solvers,
 truncation and monotone multigrid, in the nodal frames of the nonmortar normals. T^{-1} = I - N
@@ -13,7 +14,8 @@ scalar interpolation (weights may be negative), and each body keeps its own coar
 coarse spaces are the union of the two bodies' coarse spaces, coupled only through the
 transformed fine level, where the Galerkin products T^{-1}P^T (T^T A T) T^{-1}P = P^T A P are the
 untransformed, uncoupled ones plus the truncation. The friction law acts on the tangential part of
-w: the relative tangential displacement.
+w: the relative tangential displacement. A second coarse correction with every contact dof frozen
+(the tied correction, MultiBodyProblem) moves touching bodies together.
 """
 from __future__ import annotations
 
@@ -81,33 +83,51 @@ def _scalar_transfer(P: sp.csr_matrix) -> Transfer:
                     P.data.astype(float))
 
 
-class TwoBodyProblem(ContactProblem):
-    """Bodies in contact through one mortar pair (2D, or 3D through mortar_3d.py). solve() and its methods ("nmg",
+class MultiBodyProblem(ContactProblem):
+    """Bodies in contact through one or more mortar pairs (2D, or 3D through mortar_3d.py). solve() and its methods ("nmg",
     "fixed-point", "linear") are those of ContactProblem, on the transformed problem; the result's
     displacement is the canonical u = T w on the union mesh (`mesh`, with `body_id` per node), its
-    contact quantities those of the nonmortar nodes (contact_force: the nonmortar nodal force in the
-    frames, measure: D, so normal_stress is the dual multiplier)."""
+    contact quantities those of the nonmortar nodes of all pairs (contact_force: the nonmortar nodal
+    force in the frames, measure: D, so normal_stress is the dual multiplier). `pair_of_contact[c]`
+    says which pair contact node c belongs to.
 
-    def __init__(self, bodies: Sequence[Body], pair: ContactPair, friction=None, cycle: str = "F", nu1: int = 3,
-                 nu2: int = 3):
+    Each body keeps its own coarse levels (the finest prolongation is T^{-1} P): the pairs couple
+    them only through the transformed fine level. A fine nonmortar row then has weights on both
+    bodies' coarse unknowns, and the monotone bound restriction bounds each body's unknowns by a
+    part of the slack: a common motion of the bodies at the edge of the contact zone, which leaves
+    the slack unchanged, is cut as if it closed the gap. With unequal materials the interface has
+    to settle by such a motion, and Algorithm 2 alone needed more cycles on finer levels (17 -> 30
+    over levels 3-6 for E2 = 2 E1). `tied_correction` (the default) adds after each coarse
+    correction of "nmg" and "fixed-point" a second one without bounds in the space where every
+    contact dof (relative displacement) is frozen: the common motions (cpp/steps/tied_correction.hpp).
+    "tnnmg" (a linear coarse correction, projected and line-searched) needs no such help
+    (issue 13, benchmarks/two_body_levels.py)."""
+
+    def __init__(self, bodies: Sequence[Body], pairs: Sequence[ContactPair], friction=None, cycle: str = "F",
+                 nu1: int = 3, nu2: int = 3, tied_correction: bool = True):
         t0 = time.perf_counter()
         bodies = list(bodies)
         if len(bodies) < 2 or not all(isinstance(b, Body) for b in bodies):
             raise TypeError("bodies must be a sequence of at least two Body")
-        if not isinstance(pair, ContactPair):
-            raise TypeError("pair must be a ContactPair")
-        if pair.nonmortar == pair.mortar or not all(0 <= k < len(bodies) for k in (pair.nonmortar, pair.mortar)):
-            raise ValueError("the contact pair needs two different bodies of the problem")
+        pairs = [pairs] if isinstance(pairs, ContactPair) else list(pairs)
+        if not pairs or not all(isinstance(q, ContactPair) for q in pairs):
+            raise TypeError("pairs must be a ContactPair or a non-empty sequence of ContactPair")
+        for q in pairs:
+            if q.nonmortar == q.mortar or not all(0 <= k < len(bodies) for k in (q.nonmortar, q.mortar)):
+                raise ValueError("a contact pair needs two different bodies of the problem")
         friction = Frictionless() if friction is None else friction
         if not isinstance(friction, (Frictionless, Tresca, Coulomb)):
             raise TypeError("friction must be Frictionless(), Tresca(bound) or Coulomb(F)")
+        if not isinstance(tied_correction, (bool, np.bool_)):
+            raise TypeError(f"tied_correction must be True or False, got {tied_correction!r}")
+        self.tied_correction = bool(tied_correction)
         levels = {b.hierarchy.levels for b in bodies}
         if len(levels) != 1:
             raise ValueError(f"the bodies' hierarchies need the same number of levels, got {sorted(levels)}")
         dims = {b.hierarchy.finest.dim for b in bodies}
         if len(dims) != 1:
             raise ValueError(f"the bodies need one dimension, got {sorted(dims)}")
-        self.bodies, self.pair = bodies, pair
+        self.bodies, self.pairs = bodies, pairs
         self.default_cycle = CycleOptions(cycle, nu1, nu2)
         self.friction = friction
         self.benchmark = None
@@ -120,21 +140,11 @@ class TwoBodyProblem(ContactProblem):
         n = int(self.offsets[-1])
         self.mesh = _union_mesh([p.mesh for p in self.parts], self.offsets)
         self.body_id = np.repeat(np.arange(len(bodies)), sizes).astype(np.int32)
-        self.hierarchy = bodies[pair.nonmortar].hierarchy  # for reports (kind, levels)
-        self.material = bodies[pair.nonmortar].material
-        self.coupling = self._coupling()
-        c = self.coupling
-        keep = c.covered & ~self.parts[pair.nonmortar].fixed[c.nonmortar_nodes].any(axis=1)
-        if not np.any(keep):
-            raise ValueError("no nonmortar node of the contact pair sees the mortar boundary within the search "
-                             "distance (or every one is held by Dirichlet data)")
-        sm, mm = self.parts[pair.nonmortar].mesh, self.parts[pair.mortar].mesh
-        gaps = c.gaps(sm.points, mm.points)[keep]
-        normals = np.ascontiguousarray(c.normals[keep])
-        Mhat = c.Mhat[keep].tocoo()
-        nodes = c.nonmortar_nodes[keep] + self.offsets[pair.nonmortar]
-        # N: nonmortar contact rows, mortar columns, in the union numbering; T = I + N, T^{-1} = I - N
-        self.N = sp.csr_matrix((Mhat.data, (nodes[Mhat.row], Mhat.col + self.offsets[pair.mortar])), shape=(n, n))
+        self.hierarchy = bodies[pairs[0].nonmortar].hierarchy  # for reports (kind, levels)
+        self.material = bodies[pairs[0].nonmortar].material
+        fine = self._level_coupling(levels.pop() - 1, [p.fixed.any(axis=1) for p in self.parts])
+        self.couplings = fine["couplings"]
+        self.N = fine["N"]
         Tk = sp.kron(sp.identity(n) + self.N, sp.identity(d), format="csr")
         A = sp.block_diag([_bsr(p.A, p.mesh.num_points, d) for p in self.parts], format="csr")
         self.A_canonical = A
@@ -144,10 +154,12 @@ class TwoBodyProblem(ContactProblem):
         self.load = (Tk.T @ self.load_canonical.ravel()).reshape(n, d)
         self.fixed = np.vstack([p.fixed for p in self.parts])
         self.fixed_values = np.vstack([p.fixed_values for p in self.parts])
-        measure = c.D[keep]
-        facets = sm.facets[self._nonmortar_facet_mask()] + self.offsets[pair.nonmortar]
-        self.contact = ContactBoundary(nodes.astype(np.int64), normals, np.ascontiguousarray(gaps), measure,
-                                       facets=np.ascontiguousarray(facets), frames=contact_frames(normals))
+        order = np.argsort(fine["nodes"], kind="stable")  # contact nodes ascending
+        nodes, normals = fine["nodes"][order], np.ascontiguousarray(fine["normals"][order])
+        measure, gaps = fine["measure"][order], np.ascontiguousarray(fine["gaps"][order])
+        self.pair_of_contact = fine["pair"][order]
+        self.contact = ContactBoundary(nodes.astype(np.int64), normals, gaps, measure,
+                                       facets=np.ascontiguousarray(fine["facets"]), frames=contact_frames(normals))
         self.coefficients = friction.coefficients(self.contact.nodes, measure)
         self.transfers = self._transfers()
         self._solvers = {}
@@ -155,28 +167,76 @@ class TwoBodyProblem(ContactProblem):
         self.assembly_seconds = time.perf_counter() - t0 + sum(b.hierarchy.build_seconds for b in bodies)
 
     # -- the pieces ----------------------------------------------------------------------------
-    def _nonmortar_facet_mask(self) -> np.ndarray:
-        m = self.parts[self.pair.nonmortar].mesh
-        sel = np.isin(m.facet_tags, list(tag_tuple(self.pair.nonmortar_tags, "nonmortar_tags")))
-        if self.pair.region is not None:
-            sel &= np.asarray(self.pair.region(m.points[m.facets].mean(axis=1)), dtype=bool)
+    @property
+    def pair(self) -> ContactPair:
+        """The first (for two bodies: the only) contact pair."""
+        return self.pairs[0]
+
+    @property
+    def coupling(self) -> MortarCoupling:
+        """The fine mortar coupling of the first pair."""
+        return self.couplings[0]
+
+    def _nonmortar_facet_mask(self, pair: ContactPair, m: Mesh) -> np.ndarray:
+        sel = np.isin(m.facet_tags, list(tag_tuple(pair.nonmortar_tags, "nonmortar_tags")))
+        if pair.region is not None:
+            sel &= np.asarray(pair.region(m.points[m.facets].mean(axis=1)), dtype=bool)
         if not np.any(sel):
-            raise ValueError(f"no facet of body {self.pair.nonmortar} carries the nonmortar tags "
-                             f"{list(self.pair.nonmortar_tags)} (in the region)")
+            raise ValueError(f"no facet of body {pair.nonmortar} carries the nonmortar tags "
+                             f"{list(pair.nonmortar_tags)} (in the region)")
         return sel
+
+    def _level_coupling(self, level: int, held: Sequence[np.ndarray]) -> dict:
+        """The pairs' dual mortar couplings on the meshes of `level`: N_l (union numbering of that
+        level) and, per kept nonmortar node, its union id, normal, gap, measure D and pair.
+        A nonmortar node is kept where the mortar side covers the support of its dual basis
+        function and no Dirichlet data (`held[body]`, per node of the body's mesh) holds it."""
+        meshes = [b.hierarchy.meshes[level] for b in self.bodies]
+        offsets = np.r_[0, np.cumsum([m.num_points for m in meshes])].astype(np.int64)
+        n = int(offsets[-1])
+        rows, cols, vals = [], [], []
+        out = {k: [] for k in ("nodes", "normals", "gaps", "measure", "pair", "facets")}
+        couplings = []
+        for k, q in enumerate(self.pairs):
+            sm, mm = meshes[q.nonmortar], meshes[q.mortar]
+            msel = np.isin(mm.facet_tags, list(tag_tuple(q.mortar_tags, "mortar_tags")))
+            if not np.any(msel):
+                raise ValueError(f"no facet of body {q.mortar} carries the mortar tags {list(q.mortar_tags)}")
+            ssel = self._nonmortar_facet_mask(q, sm)
+            c = (mortar_coupling_2d if sm.dim == 2 else mortar_coupling_3d)(sm.points, sm.facets[ssel], mm.points, mm.facets[msel], q.search)
+            couplings.append(c)
+            keep = c.covered & ~held[q.nonmortar][c.nonmortar_nodes]
+            if not np.any(keep):
+                raise ValueError(f"no nonmortar node of contact pair {k} sees the mortar boundary within the search "
+                                 "distance (or every one is held by Dirichlet data)")
+            Mhat = c.Mhat[keep].tocoo()
+            nodes = c.nonmortar_nodes[keep] + offsets[q.nonmortar]
+            rows.append(nodes[Mhat.row])
+            cols.append(Mhat.col + offsets[q.mortar])
+            vals.append(Mhat.data)
+            out["nodes"].append(nodes)
+            out["normals"].append(c.normals[keep])
+            out["gaps"].append(c.gaps(sm.points, mm.points)[keep])
+            out["measure"].append(c.D[keep])
+            out["pair"].append(np.full(len(nodes), k, np.int32))
+            out["facets"].append(sm.facets[ssel] + offsets[q.nonmortar])
+        res = {key: np.concatenate(v) for key, v in out.items()}
+        if len(np.unique(res["nodes"])) != len(res["nodes"]):
+            raise ValueError("a node is a nonmortar node of two contact pairs (pairs must not share nonmortar nodes)")
+        N = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(n, n))
+        N.sum_duplicates()
+        N.eliminate_zeros()
+        # T^{-1} = I - N needs N^2 = 0: no mortar node of one pair is a nonmortar node of another
+        if (abs(N) @ abs(N)).nnz:
+            raise ValueError("a mortar node of one contact pair is a nonmortar node of another: make that body the "
+                             "nonmortar (or the mortar) side of both its pairs")
+        res["N"], res["couplings"] = N, couplings
+        return res
 
     def _assemble_matrix(self):
         """T^T A T of the bodies' block-diagonal stiffness (the core may take the matrix over; asking
         for `A` again comes here, not to a one-mesh assembly)."""
         return _block_matrix((self._Tk.T @ self.A_canonical @ self._Tk).tocsr(), self.mesh.dim)
-
-    def _coupling(self) -> MortarCoupling:
-        sm, mm = self.parts[self.pair.nonmortar].mesh, self.parts[self.pair.mortar].mesh
-        msel = np.isin(mm.facet_tags, list(tag_tuple(self.pair.mortar_tags, "mortar_tags")))
-        if not np.any(msel):
-            raise ValueError(f"no facet of body {self.pair.mortar} carries the mortar tags {list(self.pair.mortar_tags)}")
-        coupling = mortar_coupling_2d if sm.dim == 2 else mortar_coupling_3d
-        return coupling(sm.points, sm.facets[self._nonmortar_facet_mask()], mm.points, mm.facets[msel], self.pair.search)
 
     def _transfers(self):
         """Per level the union of the bodies' interpolations; on the finest, T^{-1} P = (I - N) P."""
@@ -193,16 +253,25 @@ class TwoBodyProblem(ContactProblem):
         """u = T w = w + N w."""
         return w + self.N @ w
 
+    def relative_displacement(self, u: np.ndarray) -> np.ndarray:
+        """w = T^{-1} u = u - N u: at a nonmortar node its displacement relative to the mortar side's
+        (D^{-1} M u_m); elsewhere u itself."""
+        return u - self.N @ u
+
     def _new_core_solver(self, law: str, options: CycleOptions, frame_fixed=None, frame_values=None, load=None,
                          fixed_values=None, take_matrix: bool = False):
         # the transformed matrix stays here (take_matrix is declined): it is what checks and reports multiply with
         c = self.contact
         values = self.fixed_values if fixed_values is None else fixed_values
-        cls = _core.ContactSolver2D if self.mesh.dim == 2 else _core.ContactSolver3D
-        return cls(self.A, self.load if load is None else load, self.fixed, values,
-                                     c.nodes, c.normals, c.gaps, self.coefficients, law,
-                                     [t.as_tuple() for t in self.transfers], options.cycle, options.nu1, options.nu2,
-                                     frame_fixed=frame_fixed, frame_values=frame_values)
+        solver = (_core.ContactSolver2D if self.mesh.dim == 2 else _core.ContactSolver3D)(self.A, self.load if load is None else load, self.fixed, values,
+                                       c.nodes, c.normals, c.gaps, self.coefficients, law,
+                                       [t.as_tuple() for t in self.transfers], options.cycle, options.nu1, options.nu2,
+                                       frame_fixed=frame_fixed, frame_values=frame_values)
+        if self.tied_correction and law != "linear":
+            if not hasattr(solver, "enable_tied_correction"):
+                raise ValueError("tied_correction needs a core with enable_tied_correction (rebuild the core)")
+            solver.enable_tied_correction()
+        return solver
 
     def _result(self, raw: dict, method: str, options: CycleOptions):
         raw = dict(raw)
@@ -212,12 +281,23 @@ class TwoBodyProblem(ContactProblem):
         return res
 
     def write_vtu(self, path, result) -> None:
-        """One VTU file with both bodies: the result's point data and a body_id field."""
+        """One VTU file with all bodies: the result's point data and a body_id field."""
         from .io import write_mesh
 
         data = result.point_data()
         data["body_id"] = self.body_id
         write_mesh(path, self.mesh, point_data=data)
+
+
+class TwoBodyProblem(MultiBodyProblem):
+    """Two (or more) bodies through one mortar pair (or a sequence of pairs): MultiBodyProblem."""
+
+    def __init__(self, bodies: Sequence[Body], pair: ContactPair, friction=None, cycle: str = "F", nu1: int = 3,
+                 nu2: int = 3, tied_correction: bool = True):
+        if not isinstance(pair, ContactPair) and not (isinstance(pair, (list, tuple))
+                                                      and all(isinstance(q, ContactPair) for q in pair)):
+            raise TypeError("pair must be a ContactPair")
+        super().__init__(bodies, pair, friction, cycle, nu1, nu2, tied_correction)
 
 
 def _union_mesh(meshes: Sequence[Mesh], offsets: np.ndarray) -> Mesh:
