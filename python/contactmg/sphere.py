@@ -31,16 +31,19 @@ def element_width(levels: int) -> float:
 
 def sphere_problem(cell: str = "hexahedron", levels: int = DEFAULT_LEVELS, friction: float = 0.4,
                    displacement: float = DISPLACEMENT, coulomb_at_zero: bool = False, cycle: str = "F",
-                   nu1: int = 3, nu2: int = 3, material: Material = None) -> ContactProblem:
+                   nu1: int = 3, nu2: int = 3, material: Material = None,
+                   memory_fraction: float = 0.8) -> ContactProblem:
     """The half ball (tetra or hexahedron cells) pushed by u = (0, 0, -displacement) on its top onto
-    z = 0, with Coulomb friction F (frictionless for F = 0 unless coulomb_at_zero)."""
+    z = 0, with Coulomb friction F (frictionless for F = 0 unless coulomb_at_zero). memory_fraction:
+    of the available memory that the hierarchy's estimate may take (MeshHierarchy.build)."""
     if isinstance(friction, bool) or not isinstance(friction, (int, float)) or not math.isfinite(friction) or friction < 0:
         raise ValueError(f"the friction coefficient must be a finite number >= 0, got {friction!r}")
     if isinstance(displacement, bool) or not isinstance(displacement, (int, float)) or not math.isfinite(displacement) \
             or not 0 < displacement < 0.25 * RADIUS:
         raise ValueError(f"the displacement D must lie in (0, {0.25 * RADIUS}) (small deformations), got {displacement!r}")
     mesh = half_ball(cell, CENTER, RADIUS, k=K, inner=INNER)
-    hierarchy = MeshHierarchy.build(mesh, levels, projector=ball_projector(CENTER, RADIUS))
+    hierarchy = MeshHierarchy.build(mesh, levels, projector=ball_projector(CENTER, RADIUS),
+                                     memory_fraction=memory_fraction)
     law = Coulomb(friction) if (friction > 0 or coulomb_at_zero) else Frictionless()
     return ContactProblem(hierarchy, material or Material(E, NU), [Dirichlet([BALL_TOP], (0.0, 0.0, -displacement))],
                           contact_tags=[BALL_SURFACE], obstacle=PlaneObstacle((0.0, 0.0, 0.0), (0.0, 0.0, -1.0)),
