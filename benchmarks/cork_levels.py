@@ -1,6 +1,6 @@
 """Issue-10 table for the cork in the bottle neck: level, dofs, cycles, push force, contact/stick/slip
-nodes for F = 0 and 0.4, nmg/linear time ratio (F = 0.4), seconds, peak RSS; one level per fresh
-process.
+nodes for F = 0 and 0.4, the linear cycles with the contact state known (F = 0.4), the TNNMG cycles
+(F = 0 and 0.4), nmg/linear time ratio (F = 0.4), seconds, peak RSS; one level per fresh process.
 
     python benchmarks/cork_levels.py --levels 2 4 [--json out/cork_levels.json]
 """
@@ -23,9 +23,12 @@ for F in (0.0, 0.4):
     out["nodes"], out["dofs"] = p.mesh.num_points, 3 * p.mesh.num_points
     out[f"F{F}"] = dict(cycles=res.cycles, converged=res.converged, push_force=cork.push_force(p, res),
                         solve_seconds=res.solve_seconds, **res.counts())
+    tn = p.solve("tnnmg", tol=1e-11)
+    out[f"F{F}"].update(tnnmg_cycles=tn.cycles, tnnmg_converged=tn.converged, tnnmg_seconds=tn.solve_seconds)
     if F == 0.4:
         lin = p.solve("linear", tol=1e-11, reference=res)
         out["nmg_over_linear"] = res.solve_seconds / lin.solve_seconds
+        out["linear_cycles"] = lin.cycles
 out["peak_rss_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 print(json.dumps(out))
 """
@@ -38,7 +41,7 @@ def main():
     a = ap.parse_args()
     rows = []
     print(f"{'lvl':>3} {'dofs':>8} {'cyc F=0':>7} {'cyc .4':>6} {'push F=0':>9} {'push .4':>8} {'stick':>6} {'slip':>5} "
-          f"{'nmg/lin':>7} {'solve s':>8} {'peak MB':>8}")
+          f"{'lin cyc':>7} {'tnnmg F=0/.4':>12} {'nmg/lin':>7} {'solve s':>8} {'peak MB':>8}")
     for L in range(a.levels[0], a.levels[1] + 1):
         r = subprocess.run([sys.executable, "-c", CHILD, str(L)], capture_output=True, text=True)
         if r.returncode != 0:
@@ -49,7 +52,8 @@ def main():
         f0, f4 = r["F0.0"], r["F0.4"]
         c = lambda f: f["cycles"] if f["converged"] else "-"  # noqa: E731
         print(f"{L:3d} {r['dofs']:8d} {c(f0):>7} {c(f4):>6} {f0['push_force']:9.3f} {f4['push_force']:8.3f} "
-              f"{f4['stick_nodes']:6d} {f4['slip_nodes']:5d} {r['nmg_over_linear']:7.2f} "
+              f"{f4['stick_nodes']:6d} {f4['slip_nodes']:5d} {r['linear_cycles']:7d} "
+              f"{str(f0['tnnmg_cycles']) + '/' + str(f4['tnnmg_cycles']):>12} {r['nmg_over_linear']:7.2f} "
               f"{f0['solve_seconds'] + f4['solve_seconds']:8.2f} {r['peak_rss_mb']:8.0f}", flush=True)
     if a.json:
         with open(a.json, "w") as fh:

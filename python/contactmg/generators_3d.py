@@ -169,7 +169,8 @@ def half_ball(cell: str = "hexahedron", center=(0.0, 0.0, 0.4), radius: float = 
     centre). Chosen by the measured cycle counts of the contact problem (F = 0.4, tol 1e-11):
     hexahedra k = 3: 11, 14, 15 cycles on levels 2, 3, 4; k = 2: 16, 22, 26; k = 4: 12, 14 (levels
     2, 3); k = 3 with 3 ring layers: 16, 22. Tetrahedra k = 3: 20, 28; k = 2: 23, 38 (24-split: 22,
-    37). A finer coarse mesh that resolves the contact zone helps more than cell shape here. A node
+    37), measured with Bey's fixed octahedron diagonal (the shortest one since: 22, 28, 29 on levels
+    2-4 for k = 3). A finer coarse mesh that resolves the contact zone helps more than cell shape here. A node
     sits at the bottom point. Tags: BALL_SURFACE on the sphere, BALL_TOP on the top. Refine with
     `ball_projector`. The block's corners must stay inside the ball (inner < 1/sqrt(3))."""
     if cell not in ("tetra", "hexahedron"):

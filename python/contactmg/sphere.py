@@ -40,18 +40,20 @@ ADAPTIVE_MAX_CYCLES = 2000
 
 def sphere_problem(cell: str = "hexahedron", levels: int = DEFAULT_LEVELS, friction: float = 0.4,
                    displacement: float = DISPLACEMENT, coulomb_at_zero: bool = False, cycle: str = "F",
-                   nu1: int = 3, nu2: int = 3, material: Material = None, hierarchy="uniform") -> ContactProblem:
+                   nu1: int = 3, nu2: int = 3, material: Material = None, hierarchy="uniform",
+                   memory_fraction: float = 0.8) -> ContactProblem:
     """The half ball (tetra or hexahedron cells) pushed by u = (0, 0, -displacement) on its top onto
     z = 0, with Coulomb friction F (frictionless for F = 0 unless coulomb_at_zero). `hierarchy`:
     "uniform" (refinement of the coarse mesh), "adaptive" (sphere_adaptive_hierarchy for this
-    friction; tetrahedra only) or a MeshHierarchy of the half ball."""
+    friction; tetrahedra only) or a MeshHierarchy of the half ball. memory_fraction: of the available memory that the
+    hierarchy's estimate may take (MeshHierarchy.build)."""
     _check_friction(friction)
     _check_displacement(displacement)
     if isinstance(hierarchy, MeshHierarchy):
         h = hierarchy
     elif hierarchy == "uniform":
         h = MeshHierarchy.build(half_ball(cell, CENTER, RADIUS, k=K, inner=INNER), levels,
-                                projector=ball_projector(CENTER, RADIUS))
+                                projector=ball_projector(CENTER, RADIUS), memory_fraction=memory_fraction)
     elif hierarchy == "adaptive":
         h = sphere_adaptive_hierarchy(levels, friction, displacement, cell=cell, material=material)
     else:
