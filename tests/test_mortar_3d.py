@@ -383,7 +383,8 @@ def test_cli_spheres_json_vtu(tmp_path):
     assert run.returncode == 0, run.stderr
     rep = json.loads(run.stdout)
     for key in ("dim", "cell", "levels", "dofs", "converged", "cycles", "contact_nodes", "stick_nodes", "slip_nodes",
-                "reaction", "contact_radius", "stick_radius", "hertz_radius", "hertz_p0", "central_pressure"):
+                "reaction", "contact_radius", "stick_radius", "hertz_radius", "hertz_p0", "central_pressure",
+                "fitted_radius", "fitted_peak_pressure"):
         assert key in rep, key
     assert rep["problem"] == "spheres" and rep["converged"] and rep["dim"] == 3 and rep["contact_nodes"] > 0
     P = rep["reaction"][2]

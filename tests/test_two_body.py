@@ -11,7 +11,7 @@ from contactmg.cylinders import RADIUS, cylinders_problem, two_body_halfwidth, t
 from contactmg.friction import Coulomb, Frictionless
 from contactmg.generators import RECT_BOTTOM, RECT_TOP, rectangle
 from contactmg.hertz import hertz_problem
-from contactmg.hertz_fit import elliptic_fit
+from contactmg.hertz_fit import elliptic_fit, radial_elliptic_fit
 from contactmg.hierarchy import MeshHierarchy
 from contactmg.material import Material
 from contactmg.mortar import mortar_coupling_2d
@@ -229,6 +229,20 @@ def test_elliptic_fit_recovers_a_sampled_hertz_profile():
     assert np.allclose(got, (a, p0, c), rtol=1e-10, atol=1e-14)
     assert all(np.isnan(elliptic_fit(x[:2], [1.0, 1.0])))  # too few nodes
     assert all(np.isnan(elliptic_fit(x, 1.0 + x ** 2)))  # not an ellipse
+
+
+def test_radial_elliptic_fit_recovers_an_axisymmetric_hertz_profile():
+    """Pressures p0 sqrt(1 - (r/a)^2) at scattered points of a disc (3D contact) give a and p0 back,
+    from r alone; the nodes near the axis alone are enough (three distinct radii)."""
+    rng = np.random.default_rng(7)
+    a, p0 = 0.093, 322.0
+    xy = rng.uniform(-a, a, (40, 2))
+    xy = xy[np.hypot(*xy.T) < a]
+    r = np.hypot(*xy.T)
+    assert np.allclose(radial_elliptic_fit(r, p0 * np.sqrt(1 - (r / a) ** 2)), (a, p0), rtol=1e-10)
+    assert np.allclose(radial_elliptic_fit(-r, p0 * np.sqrt(1 - (r / a) ** 2)), (a, p0), rtol=1e-10)  # |r|
+    with pytest.raises(ValueError, match="same length"):
+        radial_elliptic_fit(r, r[:-1])
 
 
 def _cli(*args, timeout=300):

@@ -31,3 +31,15 @@ def elliptic_fit(x: np.ndarray, pressure: np.ndarray):
     if not top > 0:
         return (np.nan, np.nan, np.nan)
     return (float(np.sqrt(top / k2)), float(np.sqrt(top)), float(c))
+
+
+def radial_elliptic_fit(r: np.ndarray, pressure: np.ndarray):
+    """(radius a, peak p0) of the axisymmetric Hertz profile p = p0 sqrt(1 - (r/a)^2) fitted to the
+    pressures of the nodes in contact at distances r from the axis (3D: a ball on a plane or two
+    balls): the profile is even in r, so the fit is elliptic_fit on the nodes and their mirror
+    images, whose centre is then 0 exactly."""
+    r, pressure = np.abs(np.asarray(r, float).ravel()), np.asarray(pressure, float).ravel()
+    if r.shape != pressure.shape:
+        raise ValueError("r and pressure need the same length")
+    a, p0, _ = elliptic_fit(np.r_[r, -r], np.r_[pressure, pressure])
+    return (a, p0)

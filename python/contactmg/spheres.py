@@ -16,6 +16,7 @@ import numpy as np
 
 from .friction import Coulomb, Frictionless
 from .generators_3d import BALL_SURFACE, BALL_TOP, SphereProjector, half_ball
+from .hertz_fit import radial_elliptic_fit
 from .hierarchy import MeshHierarchy
 from .material import Material
 from .mesh import Mesh
@@ -163,6 +164,13 @@ def run_spheres(args) -> int:
         "central_pressure": sphere.central_pressure(result) if len(result.contact_nodes) else None,
         "check_violation": check_conditions(problem, result)["max"],
     })
+    # the Hertz profile fitted to every contact node (hertz_fit.py): the central nodal multiplier
+    # converges slowly, the fit takes the whole zone
+    active = result.contact_state > 0
+    xy = problem.mesh.points[problem.contact.nodes[active], :2]
+    a_fit, p0_fit = radial_elliptic_fit(np.hypot(xy[:, 0], xy[:, 1]), np.abs(result.normal_stress[active]))
+    report["fitted_radius"] = a_fit if np.isfinite(a_fit) else None
+    report["fitted_peak_pressure"] = p0_fit if np.isfinite(p0_fit) else None
     if args.json:
         cli._emit_json(args.json, report)
     if args.vtu:
