@@ -191,7 +191,8 @@ double coulomb_on_gap(const Mat<d>& B, const Vec<d>& b, double g, double F, cons
 //    it off the obstacle it carries no friction. Never a Tresca bound taken from the residual
 //    before the visit: after a coarse correction a node about to lift can still show a compressive
 //    residual and would stick sideways while it lifts (a prototype failed for F >= 5 that way).
-//  - otherwise it goes onto the gap with the lagged bound of its old tangential position.
+//  - otherwise it goes onto the gap (coulomb_on_gap: its own Coulomb condition solved exactly where
+//    q = F |B_Tn| / lambda_min(B_TT) < 1, the lagged bound of its old tangential position elsewhere).
 template <int d>
 Vec<d> solve_node_coulomb(const Mat<d>& B, const Vec<d>& b, double g, double F, const Vec<d>& old,
                           TangentMask free = all_tangents<d>()) {

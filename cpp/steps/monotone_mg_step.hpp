@@ -54,7 +54,8 @@ class MonotoneMultigridStep {
     parallel_for((Index)r_.size(), [&](Index k) { r_[k] = f[k] - r_[k]; });
     const bool bounded = linearize();
     pc.lap(Phase::Linearize);
-    rebuilt = mask_ != built_.mask || !same_blocks<d>(hessian_, built_.hessian);
+    const bool state_changed = mask_ != built_.mask;
+    rebuilt = state_changed || !same_blocks<d>(hessian_, built_.hessian);
     if (rebuilt) {
       H_.update(A, built_.mask.data(), mask_.data(), built_.hessian, hessian_);
       built_.mask = mask_;
@@ -67,8 +68,10 @@ class MonotoneMultigridStep {
     for (int s = 0; s < opt_.nu2; ++s) Smoother::sweep(P_, u.data(), false, order_);
     pc.lap(Phase::PostSmooth);
     if constexpr (L::coarse_freezes_bound) {
-      // old_ = x (before the cycle), u = G(x): mix the settled cycles (settled_anderson.hpp)
-      if (rebuilt) anderson_.reset();
+      // old_ = x (before the cycle), u = G(x): mix the cycles of one contact state (settled_anderson.hpp).
+      // A 3D sliding node's friction Hessian changes with its u_T in every cycle (a rebuild, but
+      // a smooth change of the cycle map): only a change of the truncation restarts the history.
+      if (state_changed) anderson_.reset();
       anderson_.step(old_, u, [&](std::vector<double>& y) { return admit_mixed(y); });
     }
     parallel_for((Index)u.size(), [&](Index k) { old_[k] = u[k] - old_[k]; });
