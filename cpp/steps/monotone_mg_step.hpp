@@ -71,8 +71,9 @@ class MonotoneMultigridStep {
       // old_ = x (before the cycle), u = G(x): mix the cycles of one contact state (settled_anderson.hpp).
       // A 3D sliding node's friction Hessian changes with its u_T in every cycle (a rebuild, but
       // a smooth change of the cycle map): only a change of the truncation restarts the history.
-      if (state_changed) anderson_.reset();
-      anderson_.step(old_, u, [&](std::vector<double>& y) { return admit_mixed(y); });
+      // Without a sliding node no frozen bound enters the coarse problem: the plain cycle is left as it is.
+      if (state_changed || !any_sliding()) anderson_.reset();
+      else anderson_.step(old_, u, [&](std::vector<double>& y) { return admit_mixed(y); });
     }
     parallel_for((Index)u.size(), [&](Index k) { old_[k] = u[k] - old_[k]; });
     A.multiply(old_.data(), tmp_.data());
@@ -141,6 +142,12 @@ class MonotoneMultigridStep {
       if (!Hc.isZero(0.0)) hessian_.emplace_back(i, Hc);
     }
     return bounded;
+  }
+
+  bool any_sliding() const {
+    for (Index c = 0; c < P_.num_contact(); ++c)
+      if (node_state<d>(P_.node(c), it_.u.data() + P_.contact_node(c) * d) == NodeState::Slip) return true;
+    return false;
   }
 
   // The mixed iterate y of the Anderson step takes the contact state of the plain cycle's result

@@ -8,8 +8,8 @@
 // cycles removes those few slow modes, as a Krylov method would on the affine map.
 //
 // What keeps it safe (no parameter a user sets; the depth is fixed here):
-//  - it mixes only cycles of one contact state (the caller resets the history when the truncation
-//    of the coarse problem changed);
+//  - it mixes only cycles of one contact state with a sliding node (the caller resets the history
+//    when the truncation of the coarse problem changed or nothing slides);
 //  - the mixed iterate is handed to `admit`, which must give it exactly the contact state of the
 //    plain cycle's result (or refuse it): active normals on the gap, sticking tangentials at their
 //    exact values, inactive nodes off the obstacle, sliding nodes sliding the same way;
