@@ -114,42 +114,21 @@ void free_tangential_coupling(const Mat<d>& B, TangentMask free, double& stiffne
     }
 }
 
-// A root of the continuous phi in [lo, hi] with phi(lo) > 0 >= phi(hi): Illinois (regula falsi,
-// the kept end's value halved when it is kept twice), exact in a few steps where phi is piecewise
-// linear (2D); the point of smallest |phi| seen.
-template <class Phi>
-double bracketed_root(Phi&& phi, double lo, double f_lo, double hi, double f_hi) {
-  double best = std::abs(f_lo) < std::abs(f_hi) ? lo : hi, f_best = std::min(std::abs(f_lo), std::abs(f_hi));
-  int side = 0;
-  for (int it = 0; it < 200 && f_best != 0 && hi - lo > 4e-16 * hi; ++it) {
-    const double s = hi - f_hi * (hi - lo) / (f_hi - f_lo);
-    if (!(s > lo && s < hi)) break;
-    const double fs = phi(s);
-    if (std::abs(fs) < f_best) { best = s; f_best = std::abs(fs); }
-    if (fs > 0) { lo = s; f_lo = fs; if (side == -1) f_hi *= 0.5; side = -1; }
-    else { hi = s; f_hi = fs; if (side == 1) f_lo *= 0.5; side = 1; }
-  }
-  return best;
-}
-
-// Coulomb on the gap: x_n = g and x_T the Tresca minimizer x_T(s) for the bound s = F |s_n| of the
-// node's own position. s_n depends on x_T through the off-diagonal of the node's block:
-// -s_n = p(x_T) = b_n - B_nn g - B_nT x_T, so s is a root of phi(s) = F max(0, p(x_T(s))) - s
-// (one exists: phi(0) >= 0, and phi(s) = F max(0, p(x_T(s_c))) - s decreases to -inf beyond
-// s_c = |c_free|, where the node sticks). By q = F |B_nT| / lambda_min(B_TT):
-//  - q < 1: x_T(.) is 1/lambda_min-Lipschitz in s, so phi + s is q-Lipschitz: the root is unique
-//    and depends continuously on (B, b), not on the old position. A bound lagged at the old
-//    position converged to it only by a factor q per visit, and at a stick/slip edge node of a
-//    graded mesh (adaptive Hertz level 9, F = 40: q = 0.75) the slow local iteration with the
-//    node's stick/slip switch let the cycle return to an iterate that was no fixed point of the
-//    sweep (a stall).
-//  - q >= 1 (F > ~4.8 at uniform Hertz boundary nodes, nu = 0.28; q = 7-13 on the tetrahedral
-//    sphere at F = 40): the sliding branch has negative effective stiffness and phi may have
-//    several roots. The rule takes the one nearest the lagged bound s_old = F max(0, p(start_T)):
-//    a start that solves the node's condition is kept (a solution of the whole problem stays a
-//    fixed point of the sweep), otherwise the node goes to the nearest local solution, never
-//    iterating the lagged map (which runs off the negative-stiffness branch into tension: Hertz
-//    F = 5 level 7 stalled that way). Roots are bracketed on 32 equal pieces of [0, s_c].
+// Coulomb on the gap: x_n = g and x_T the Tresca minimizer x_T(s) for a bound s = F |s_n|, s_n =
+// (A u - f)_n at the node. s_n depends on x_T through the off-diagonal of the node's block:
+// -s_n = p(x_T) = b_n - B_nn g - B_nT x_T. Two cases, by q = F |B_nT| / lambda_min(B_TT):
+//  - q < 1: the node's own Coulomb condition is solved exactly -- s is the root of
+//    s = F max(0, p(x_T(s))). x_T(.) is 1/lambda_min-Lipschitz in s, so the right side is
+//    q-Lipschitz: the root is unique and depends continuously on (B, b), not on the old position.
+//    The lagged bound of the case below converged to it only by a factor q per visit, and at a
+//    stick/slip edge node of a graded mesh (adaptive Hertz level 9, F = 40: q = 0.75) the slow
+//    local iteration and the node's stick/slip switch let the cycle return to an iterate that
+//    was no fixed point of the sweep (a stall).
+//  - q >= 1 (F > ~4.8 at uniform Hertz boundary nodes, nu = 0.28): the sliding branch of the
+//    local problem has negative effective stiffness, so it need not have a unique solution, and
+//    a local fixed-point loop runs off it into tension and the node lifts (Hertz F = 5 level 7
+//    stalled in a limit cycle that way). Then s is lagged: evaluated at (g, start_T). A local
+//    solution is still a fixed point (it is its own start), and the map has no jumps.
 // Returns s_n at the new position.
 template <int d>
 double coulomb_on_gap(const Mat<d>& B, const Vec<d>& b, double g, double F, const Vec<d>& start, Vec<d>& x,
@@ -161,56 +140,42 @@ double coulomb_on_gap(const Mat<d>& B, const Vec<d>& b, double g, double F, cons
   const typename T::V c = b.template tail<m>() - BTn * g;
   const double p0 = b[0] - B(0, 0) * g;  // -s_n at (g, 0)
   auto pressure = [&](const typename T::V& xt) { return p0 - BTn.dot(xt); };
-  auto xt_of = [&](double s) { return T::solve(BTT, c, s, free); };
-  auto phi = [&](double s) { return F * std::max(0.0, pressure(xt_of(s))) - s; };
   double stiffness, coupling;
   free_tangential_coupling<d>(B, free, stiffness, coupling);
   const double q = stiffness > 0 ? F * coupling / stiffness : kInf;
-  double s_root;
-  if (q < 1) {
-    // phi decreases strictly (slope <= q - 1 < 0) from phi(0) >= 0
+  typename T::V xt;
+  if (!(q < 1)) {
+    xt = T::solve(BTT, c, F * std::max(0.0, pressure(start.template tail<m>())), free);
+  } else {
+    // phi(s) = F max(0, p(x_T(s))) - s decreases strictly (slope <= q - 1 < 0) from phi(0) >= 0.
+    auto xt_of = [&](double s) { return T::solve(BTT, c, s, free); };
+    auto phi = [&](double s, typename T::V& at) { at = xt_of(s); return F * std::max(0.0, pressure(at)) - s; };
+    typename T::V at;
     const double s_stick = F * std::max(0.0, p0);  // sticking (x_T = 0) solves it if x_T(s_stick) = 0
-    double lo = 0, f_lo = phi(0.0);
-    s_root = 0;
+    double f_lo = phi(0.0, at);
+    xt = at;
     if (f_lo > 0) {
-      double hi = s_stick, f_hi = phi(hi);
-      if (f_hi > 0) {  // sliding: the root is above; phi(s) <= phi(lo) - (1 - q)(s - lo) brackets it
+      double lo = 0, hi = s_stick, f_hi = phi(hi, at);
+      if (f_hi > 0) {  // sliding: the root is above; phi(s) <= phi(0) - (1 - q) s brackets it
         lo = hi; f_lo = f_hi;
         hi = lo + f_lo / (1 - q);
-        for (int k = 0; k < 60 && (f_hi = phi(hi)) > 0; ++k) { lo = hi; f_lo = f_hi; hi = lo + 2 * f_lo / (1 - q); }
+        for (int k = 0; k < 60 && (f_hi = phi(hi, at)) > 0; ++k) { lo = hi; f_lo = f_hi; hi = lo + 2 * f_lo / (1 - q); }
       }
-      s_root = bracketed_root(phi, lo, f_lo, hi, f_hi);
-    }
-  } else {
-    const double s_old = F * std::max(0.0, pressure(start.template tail<m>()));
-    const double f_old = phi(s_old);
-    double sc = 0;
-    for (int k = 0; k < m; ++k)
-      if (free >> k & 1u) sc += c[k] * c[k];
-    sc = std::sqrt(sc);
-    if (std::abs(f_old) <= 1e-13 * (s_old + std::abs(F * p0) + F * coupling * start.template tail<m>().norm())) {
-      s_root = s_old;  // the start solves the node's condition (to round-off): keep it
-    } else {
-      s_root = -1;
-      auto consider = [&](double r) {
-        if (s_root < 0 || std::abs(r - s_old) < std::abs(s_root - s_old)) s_root = r;
-      };
-      const double f_c = phi(sc);  // beyond s_c: phi(s) = f_c + sc - s, one root if f_c >= 0
-      if (f_c >= 0) consider(sc + f_c);
-      constexpr int kPieces = 32;
-      double a = 0, f_a = phi(0.0);
-      if (f_a == 0) consider(0.0);
-      for (int k = 1; k <= kPieces && sc > 0; ++k) {
-        const double z = k == kPieces ? sc : sc * k / kPieces, f_z = k == kPieces ? f_c : phi(z);
-        if (f_z == 0) consider(z);
-        else if ((f_a > 0) != (f_z > 0) && f_a != 0)
-          consider(f_a > 0 ? bracketed_root(phi, a, f_a, z, f_z) : bracketed_root([&](double s) { return -phi(s); }, a, -f_a, z, -f_z));
-        a = z; f_a = f_z;
+      // Illinois (regula falsi, the kept end's value halved when it is kept twice): exact in a
+      // few steps on the piecewise-linear 2D phi; it ends at the point of smallest |phi| seen.
+      double best = std::abs(f_lo) < std::abs(f_hi) ? lo : hi, f_best = std::min(std::abs(f_lo), std::abs(f_hi));
+      int side = 0;
+      for (int it = 0; it < 200 && f_best != 0 && hi - lo > 4e-16 * hi; ++it) {
+        const double s = hi - f_hi * (hi - lo) / (f_hi - f_lo);
+        if (!(s > lo && s < hi)) break;
+        const double fs = phi(s, at);
+        if (std::abs(fs) < f_best) { best = s; f_best = std::abs(fs); }
+        if (fs > 0) { lo = s; f_lo = fs; if (side == -1) f_hi *= 0.5; side = -1; }
+        else { hi = s; f_hi = fs; if (side == 1) f_lo *= 0.5; side = 1; }
       }
-      if (s_root < 0) s_root = s_old;  // not reached: phi changes sign on [0, s_c] or has the root beyond
+      xt = xt_of(best);
     }
   }
-  const typename T::V xt = xt_of(s_root);
   x[0] = g;
   x.template tail<m>() = xt;
   return -pressure(xt);
@@ -226,9 +191,8 @@ double coulomb_on_gap(const Mat<d>& B, const Vec<d>& b, double g, double F, cons
 //    it off the obstacle it carries no friction. Never a Tresca bound taken from the residual
 //    before the visit: after a coarse correction a node about to lift can still show a compressive
 //    residual and would stick sideways while it lifts (a prototype failed for F >= 5 that way).
-//  - otherwise it goes onto the gap (coulomb_on_gap: its own Coulomb condition solved exactly, the
-//    unique local solution where q = F |B_Tn| / lambda_min(B_TT) < 1, else the one nearest the old
-//    position's bound).
+//  - otherwise it goes onto the gap (coulomb_on_gap: its own Coulomb condition solved exactly where
+//    q = F |B_Tn| / lambda_min(B_TT) < 1, the lagged bound of its old tangential position elsewhere).
 template <int d>
 Vec<d> solve_node_coulomb(const Mat<d>& B, const Vec<d>& b, double g, double F, const Vec<d>& old,
                           TangentMask free = all_tangents<d>()) {
