@@ -181,7 +181,9 @@ def test_two_body_cycles_are_flat_over_levels_unequal_materials():
     solution is tnnmg's and that of nmg without the tied correction."""
     from contactmg.cylinders import cylinders_problem
 
-    assert max(c := _cycles((3, 4, 5), 0.4, 4000.0, 0.2, "nmg")) - min(c) <= 2, c
+    # no growth with the level: the finer levels take at most two cycles more than level 3 (they may take fewer)
+    c = _cycles((3, 4, 5), 0.4, 4000.0, 0.2, "nmg")
+    assert max(c[1:]) <= c[0] + 2 and max(c) <= 25, c
     p = cylinders_problem(levels=4, friction=0.4, E2=4000.0, nu2=0.2)
     a, b = p.solve("tnnmg", tol=1e-12), p.solve("nmg", tol=1e-12)
     assert np.abs(a.displacement - b.displacement).max() <= 1e-8 * np.abs(b.displacement).max()

@@ -6,6 +6,9 @@
 namespace cmg::law {
 
 struct Tresca {
+  // whether the coarse problem freezes a bound that depends on the iterate (Coulomb's F |s_n|):
+  // then the settled cycle contracts slowly and is Anderson-accelerated (steps/settled_anderson.hpp)
+  static constexpr bool coarse_freezes_bound = false;
   static constexpr bool has_contact = true;
   template <int d>
   static Vec<d> solve(const Mat<d>& B, const Vec<d>& b, const ContactNode& p, const Vec<d>& old) {

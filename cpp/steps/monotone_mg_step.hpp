@@ -9,6 +9,7 @@
 #include "steps/fine_iterate.hpp"
 #include "steps/nonlinear_gauss_seidel.hpp"
 #include "steps/tied_correction.hpp"
+#include "steps/settled_anderson.hpp"
 
 namespace cmg {
 
@@ -55,7 +56,8 @@ class MonotoneMultigridStep {
     parallel_for((Index)r_.size(), [&](Index k) { r_[k] = f[k] - r_[k]; });
     const bool bounded = linearize();
     pc.lap(Phase::Linearize);
-    rebuilt = mask_ != built_.mask || !same_blocks<d>(hessian_, built_.hessian);
+    const bool state_changed = mask_ != built_.mask;
+    rebuilt = state_changed || !same_blocks<d>(hessian_, built_.hessian);
     if (rebuilt) {
       H_.update(A, built_.mask.data(), mask_.data(), built_.hessian, hessian_);
       built_.mask = mask_;
@@ -68,6 +70,14 @@ class MonotoneMultigridStep {
     pc.lap(Phase::CoarseCorrection);
     for (int s = 0; s < opt_.nu2; ++s) Smoother::sweep(P_, u.data(), false, order_);
     pc.lap(Phase::PostSmooth);
+    if constexpr (L::coarse_freezes_bound) {
+      // old_ = x (before the cycle), u = G(x): mix the cycles of one contact state (settled_anderson.hpp).
+      // A 3D sliding node's friction Hessian changes with its u_T in every cycle (a rebuild, but
+      // a smooth change of the cycle map): only a change of the truncation restarts the history.
+      // Without a sliding node no frozen bound enters the coarse problem: the plain cycle is left as it is.
+      if (state_changed || !any_sliding()) anderson_.reset();
+      else anderson_.step(old_, u, [&](std::vector<double>& y) { return admit_mixed(y); });
+    }
     parallel_for((Index)u.size(), [&](Index k) { old_[k] = u[k] - old_[k]; });
     A.multiply(old_.data(), tmp_.data());
     parallel_for((Index)u.size(), [&](Index k) { it_.Au[k] += tmp_[k]; });
@@ -137,6 +147,38 @@ class MonotoneMultigridStep {
     return bounded;
   }
 
+  bool any_sliding() const {
+    for (Index c = 0; c < P_.num_contact(); ++c)
+      if (node_state<d>(P_.node(c), it_.u.data() + P_.contact_node(c) * d) == NodeState::Slip) return true;
+    return false;
+  }
+
+  // The mixed iterate y of the Anderson step takes the contact state of the plain cycle's result
+  // it_.u exactly (on the gap exactly g, sticking tangentials at their exact value), or is refused:
+  // an inactive node it puts onto or past the obstacle, a sliding node it stops or turns.
+  bool admit_mixed(std::vector<double>& y) const {
+    const std::vector<double>& u = it_.u;
+    for (Index c = 0; c < P_.num_contact(); ++c) {
+      const Index k = P_.contact_node(c) * d;
+      const ContactNode p = P_.node(c);
+      const NodeState s = node_state<d>(p, u.data() + k);
+      if (s == NodeState::Free) {
+        if (!(y[k] < p.gap)) return false;
+        continue;
+      }
+      y[k] = p.gap;
+      if (s == NodeState::Stick) {
+        for (int a = 1; a < d; ++a) y[k + a] = u[k + a];
+        continue;
+      }
+      if (node_state<d>(p, y.data() + k) != NodeState::Slip) return false;
+      const Vec<d> vu = slip_increment<d>(p, u.data() + k), vy = slip_increment<d>(p, y.data() + k);
+      for (int a = 1; a < d; ++a)
+        if ((vu[a] > 0) != (vy[a] > 0) || (vu[a] < 0) != (vy[a] < 0)) return false;
+    }
+    return true;
+  }
+
   const ContactProblem<d>& P_;
   GalerkinHierarchy<d>& H_;
   CoarseCycle<d>& C_;
@@ -151,6 +193,7 @@ class MonotoneMultigridStep {
   std::vector<double> r_, w_, old_, lo_, hi_;
   std::vector<double>& tmp_ = w_;
   std::vector<std::pair<Index, Mat<d>>> hessian_;
+  SettledAnderson anderson_;
 };
 
 }  // namespace cmg
