@@ -234,12 +234,14 @@ void bind_dim(py::module_& m) {
              BM fine = take_matrix ? std::exchange(A, BM()) : BM(A);
              return new CS(std::move(fine), f.data(), fixed.data(), fixed_values.data(), cn, normals.data(), gaps.data(), coefficients.data(),
                            parse_law(law), T, co, frame_fixed.is_none() ? nullptr : ff.data(),
-                           frame_fixed.is_none() ? nullptr : fv.data());
+                           frame_fixed.is_none() ? nullptr : fv.data(), co.ordering == Ordering::Coloured);
            }),
            py::arg("A"), py::arg("load"), py::arg("fixed"), py::arg("fixed_values"), py::arg("contact_nodes"),
            py::arg("normals"), py::arg("gaps"), py::arg("coefficients"), py::arg("law"), py::arg("transfers"),
            py::arg("cycle") = "V", py::arg("nu1") = 3, py::arg("nu2") = 3, py::arg("frame_fixed") = py::none(),
            py::arg("frame_values") = py::none(), py::arg("ordering") = "lexicographic", py::arg("take_matrix") = false,
+           "ordering coloured also stores every level but the coarsest by colours (each colour one contiguous range "
+           "of rows, so a coloured sweep streams memory; inputs and outputs keep the caller's numbering); "
            "fixed/fixed_values: Dirichlet components in canonical axes (a contact node keeps its contact condition "
            "in its free directions); frame_fixed/frame_values (nc, d): components fixed in the contact frames")
       .def("solve", [](CS& S, py::object u0, double tol, double rtol, int max_cycles, bool fixed_point, double fp_tol,
@@ -326,11 +328,11 @@ void bind_dim(py::module_& m) {
                              "the components of each contact node fixed in its frame (num_contact, d)")
       .def("coarse_matrix", [](const CS& S, int l) {
              if (l < 0 || l >= S.hierarchy().num_coarse_levels()) throw py::index_error("no such coarse level");
-             return std::make_shared<BM>(S.hierarchy().matrix(l));
+             return std::make_shared<BM>(S.coarse_matrix_in_user_order(l));
            })
       .def("set_rows_to_smooth", [](CS& S, int l, IArr rows) {
              if (l < 0 || l >= S.hierarchy().num_coarse_levels()) throw py::index_error("no such coarse level");
-             S.coarse_cycle().set_rows_to_smooth(l, SweepOrder(std::vector<Index>(rows.data(), rows.data() + rows.size())));
+             S.set_rows_to_smooth(l, std::vector<Index>(rows.data(), rows.data() + rows.size()));
            }, py::arg("level"), py::arg("rows"), "the rows smoothed on coarse level `level` (all by default)")
       .def("set_slip_origin", [](CS& S, py::object u_prev) {
              if (u_prev.is_none()) { S.set_slip_origin(nullptr); return; }
@@ -341,7 +343,8 @@ void bind_dim(py::module_& m) {
            "Load paths: the previous step's displacement (n, d), canonical; friction then acts on the slip "
            "increment u_T - u_prev_T and stick means no slip in this step. None: from the reference configuration")
       .def_property_readonly("has_slip_origin", &CS::has_slip_origin)
-      .def("fine_matrix", [](const CS& S) { return std::make_shared<BM>(S.fine_matrix()); })
+      .def("fine_matrix", [](const CS& S) { return std::make_shared<BM>(S.fine_matrix_in_user_order()); })
+      .def_property_readonly("renumbered", &CS::renumbered, "whether the levels are stored by colours")
       .def("memory_bytes", &CS::memory_bytes)
       .def_property_readonly("num_colours", &CS::num_fine_colours, "colours of the fine block graph (coloured sweeps)")
       .def("rebuild_coarse", &CS::rebuild_coarse, "Full Galerkin rebuild of the coarse matrices for the current truncation");

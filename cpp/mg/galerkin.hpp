@@ -4,6 +4,36 @@
 
 namespace cmg {
 
+// The block pattern of P^T A P (PT = P^T), with a diagonal slot in every row; values left empty.
+template <int d>
+BlockMatrix<d> galerkin_pattern(const BlockMatrix<d>& A, const BlockMatrix<d>& P, const BlockMatrix<d>& PT) {
+  const Index nc = P.cols;
+  BlockMatrix<d> C;
+  C.rows = C.cols = nc;
+  C.indptr.assign(nc + 1, 0);
+  std::vector<Index> marker(nc, -1);
+  std::vector<ColIndex> row;
+  for (Index I = 0; I < nc; ++I) {
+    row.clear();
+    for (Index a = PT.indptr[I]; a < PT.indptr[I + 1]; ++a) {
+      const Index i = PT.indices[a];
+      for (Index k = A.indptr[i]; k < A.indptr[i + 1]; ++k) {
+        const Index j = A.indices[k];
+        for (Index b = P.indptr[j]; b < P.indptr[j + 1]; ++b) {
+          const Index J = P.indices[b];
+          if (marker[J] != I) { marker[J] = I; row.push_back((ColIndex)J); }
+        }
+      }
+    }
+    if (std::find(row.begin(), row.end(), (ColIndex)I) == row.end()) row.push_back((ColIndex)I);  // keep a diagonal slot
+    std::sort(row.begin(), row.end());
+    C.indices.insert(C.indices.end(), row.begin(), row.end());
+    C.indptr[I + 1] = C.indices.size();
+  }
+  C.find_diagonal();
+  return C;
+}
+
 // C = P~^T A P~ with P~ = diag(mask) P (mask per fine dof, nullptr = all ones). The pattern of C is
 // computed once; later calls with a changed mask only refill the values.
 template <int d>
@@ -24,39 +54,20 @@ class GalerkinProduct {
 
  private:
   void symbolic(const BlockMatrix<d>& A, const BlockMatrix<d>& P, BlockMatrix<d>& C) {
-    const Index nc = P.cols;
-    C.rows = C.cols = nc;
-    C.indptr.assign(nc + 1, 0);
-    C.indices.clear();
-    std::vector<Index> marker(nc, -1);
-    std::vector<Index> row;
-    for (Index I = 0; I < nc; ++I) {
-      row.clear();
-      for (Index a = PT_.indptr[I]; a < PT_.indptr[I + 1]; ++a) {
-        const Index i = PT_.indices[a];
-        for (Index k = A.indptr[i]; k < A.indptr[i + 1]; ++k) {
-          const Index j = A.indices[k];
-          for (Index b = P.indptr[j]; b < P.indptr[j + 1]; ++b) {
-            const Index J = P.indices[b];
-            if (marker[J] != I) { marker[J] = I; row.push_back(J); }
-          }
-        }
-      }
-      if (std::find(row.begin(), row.end(), I) == row.end()) row.push_back(I);  // keep a diagonal slot
-      std::sort(row.begin(), row.end());
-      C.indices.insert(C.indices.end(), row.begin(), row.end());
-      C.indptr[I + 1] = C.indices.size();
-    }
+    C = galerkin_pattern<d>(A, P, PT_);
     C.values.assign(C.indices.size() * d * d, 0.0);
-    C.find_diagonal();
   }
 
+  // Row I of C is formed by one thread from the rows of P^T, in the same order on any thread count
+  // (bit for bit); each thread keeps its own column -> position map.
   void numeric(const BlockMatrix<d>& A, const BlockMatrix<d>& P, const std::uint8_t* mask, BlockMatrix<d>& C) {
     const Index nc = P.cols;
     std::fill(C.values.begin(), C.values.end(), 0.0);
-    std::vector<Index> pos(nc, -1);
-    Mat<d> Z, Y;
-    for (Index I = 0; I < nc; ++I) {
+    std::vector<std::vector<Index>> pos_of_thread(team_size());
+    parallel_for(nc, [&](Index I) {
+      std::vector<Index>& pos = pos_of_thread[thread_id()];
+      if (pos.empty()) pos.assign(nc, -1);
+      Mat<d> Z, Y;
       for (Index k = C.indptr[I]; k < C.indptr[I + 1]; ++k) pos[C.indices[k]] = k;
       for (Index a = PT_.indptr[I]; a < PT_.indptr[I + 1]; ++a) {
         const Index i = PT_.indices[a];
@@ -72,7 +83,7 @@ class GalerkinProduct {
           for (Index b = P.indptr[j]; b < P.indptr[j + 1]; ++b) C.block(pos[P.indices[b]]).noalias() += Y * P.block(b);
         }
       }
-    }
+    }, 256);
   }
 
   BlockMatrix<d> PT_;  // only during build()

@@ -100,6 +100,7 @@ def run_sphere(args) -> int:
     problem = sphere.sphere_problem(args.cell, args.levels, args.friction, args.displacement,
                                     coulomb_at_zero=args.method == "fixed-point", cycle=args.cycle, nu1=args.nu1,
                                     nu2=args.nu2)
+    cli.use_ordering(problem, args)
     path = None
     if cli_path.wanted(args):
         path = cli_path.solve(args, problem, [BALL_TOP], (0.0, 0.0, -args.displacement), (args.shear or 0.0, 0.0, 0.0),
@@ -150,6 +151,7 @@ def run_cork(args) -> int:
     cli_path.check(args)
     problem = cork.cork_problem(args.levels, args.friction, args.push, coulomb_at_zero=args.method == "fixed-point",
                                 cycle=args.cycle, nu1=args.nu1, nu2=args.nu2)
+    cli.use_ordering(problem, args)
     path = None
     if cli_path.wanted(args):
         path = cli_path.solve(args, problem, [CORK_TOP], (0.0, 0.0, -args.push), (0.0, 0.0, args.push),

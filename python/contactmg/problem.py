@@ -30,6 +30,11 @@ SOLVE_TAKES_CYCLE_OPTIONS = "progress" in (_core.ContactSolver2D.solve.__doc__ o
 SOLVE_TAKES_THREADS = "threads" in (_core.ContactSolver2D.solve.__doc__ or "")
 ORDERINGS = ("coloured", "lexicographic")
 CORE_TAKES_MATRIX = "take_matrix" in (_core.ContactSolver2D.__init__.__doc__ or "")
+# Issue 15: a core solver built for the coloured order stores its levels by colours (each colour a
+# contiguous range: the coloured sweep streams memory). The default ordering of a problem's solves,
+# chosen by measurement (docs/scaling.md, benchmarks/parallel_bandwidth.py).
+CORE_RENUMBERS = hasattr(_core.ContactSolver2D, "renumbered")
+DEFAULT_ORDERING = "coloured" if CORE_RENUMBERS else "lexicographic"
 
 
 def tag_tuple(tags, name: str) -> tuple:
@@ -156,6 +161,9 @@ class CycleOptions:
 
 
 class ContactProblem:
+    # the ordering of solves that name none; the kept core solver is stored for it (set before the
+    # first solve to change it: another ordering per solve runs on that solver, slower, same result)
+    default_ordering: str = DEFAULT_ORDERING
     """Linear elasticity on the finest level of `hierarchy` with contact on the facets tagged
     `contact_tags` against `obstacle` under `friction`. Without contact tags it is a linear
     elasticity problem solved by linear multigrid.
@@ -329,11 +337,14 @@ class ContactProblem:
         args = (self.load if load is None else load, self.fixed, values, c.nodes, c.normals,
                 c.gaps, self.coefficients, law, [t.as_tuple() for t in self.hierarchy.transfers], options.cycle,
                 options.nu1, options.nu2)
+        kw = dict(frame_fixed=frame_fixed, frame_values=frame_values)
+        if CORE_RENUMBERS:
+            kw["ordering"] = self.default_ordering
         if not (CORE_TAKES_MATRIX and take_matrix):
-            return cls(self.A, *args, frame_fixed=frame_fixed, frame_values=frame_values)
+            return cls(self.A, *args, **kw)
         # The core takes the assembled matrix over (left empty here): one fine matrix in memory.
         A, self._A = self.A, None
-        return cls(A, *args, frame_fixed=frame_fixed, frame_values=frame_values, take_matrix=True)
+        return cls(A, *args, take_matrix=True, **kw)
 
     def core_solver(self, cycle: Optional[str] = None, nu1: Optional[int] = None, nu2: Optional[int] = None):
         """The core solver for the cycle options (defaults: the problem's), built on first use and
@@ -383,9 +394,9 @@ class ContactProblem:
         reports cycles (SOLVE_TAKES_CYCLE_OPTIONS); an exception it raises stops the solve. With an
         older core, which runs all cycles in one call, asking for it is an error. `threads`: the
         threads of the sweeps, products and norms (0: all cores); the result is the same bit for
-        bit on any count. `ordering` of every Gauss-Seidel sweep: "coloured" (the default: colours
-        of the block graph, the rows of one colour at once) or "lexicographic" (one thread for the
-        sweeps)."""
+        bit on any count. `ordering` of every Gauss-Seidel sweep: "coloured" (colours of the block
+        graph, the rows of one colour at once; the levels stored by colours) or "lexicographic" (one
+        thread for the sweeps); None: `default_ordering` (DEFAULT_ORDERING)."""
         if method not in METHODS:
             raise ValueError(f"method must be one of {METHODS}, got {method!r}")
         options = self._options(cycle, nu1, nu2)
@@ -403,6 +414,8 @@ class ContactProblem:
             raise ValueError(f"threads must be an integer in 0..4096 (0: all cores), got {threads!r}")
         if ordering is not None and ordering not in ORDERINGS:
             raise ValueError(f"ordering must be one of {ORDERINGS}, got {ordering!r}")
+        if ordering is None and CORE_RENUMBERS:
+            ordering = self.default_ordering
         kw = dict(tol=float(tol), rtol=float(rtol), max_cycles=int(max_cycles), fixed_point_tol=float(fixed_point_tol),
                   fixed_point_max=int(fixed_point_max), reference=error_reference)
         if SOLVE_TAKES_THREADS:
