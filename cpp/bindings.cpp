@@ -5,6 +5,7 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 #include <utility>
+#include "bandwidth.hpp"
 #include "contact_solver.hpp"
 #include "fem/assembly.hpp"
 #include "fem/bisection.hpp"
@@ -437,6 +438,13 @@ PYBIND11_MODULE(_core, m) {
 
   m.def("openmp", [] { return have_openmp(); }, "whether the core was built with OpenMP threads");
   m.def("max_threads", [] { return max_threads(); }, "the cores the threads of a solve may use (threads=0)");
+  m.def("stream_triad", [](Index n, int repeats, int threads) {
+    if (n < 1 || repeats < 1) throw InputError("stream_triad needs n >= 1 and repeats >= 1");
+    py::gil_scoped_release release;
+    ThreadScope team(threads);
+    return triad_bytes_per_second(n, repeats) / 1e9;
+  }, py::arg("n") = 40000000, py::arg("repeats") = 5, py::arg("threads") = 1,
+  "GB/s of the triad a = b + 1.5 c over n doubles on `threads` threads (best of `repeats`; 24 bytes an entry)");
   m.def("cell_table", [] {
     py::dict out;
     for (const CellInfo& c : cell_table()) {

@@ -75,9 +75,8 @@ class ContactProblem {
     invert_diagonal<d>(A_, Dinv_, inert_, max_diagonal<d>(A_));
     base_mask_.assign(n * d, 1);
     for (Index k = 0; k < n * d; ++k) base_mask_[k] = fixed_[k] ? 0 : 1;
-    fixed_values_.assign(n * d, 0.0);
     for (Index k = 0; k < n * d; ++k)
-      if (fixed_[k]) fixed_values_[k] = values[k];
+      if (fixed_[k]) { fixed_dofs_.push_back(k); fixed_dof_values_.push_back(values[k]); }
   }
 
   Index num_nodes() const { return A_.rows; }
@@ -87,7 +86,9 @@ class ContactProblem {
   const std::vector<double>& Dinv() const { return Dinv_; }
   const std::vector<std::uint8_t>& base_mask() const { return base_mask_; }  // 0 on Dirichlet dofs (local)
   const std::vector<std::uint8_t>& fixed() const { return fixed_; }
-  const std::vector<double>& fixed_values() const { return fixed_values_; }
+  // The Dirichlet dofs (local numbering) and their values: a list, not a vector over all dofs.
+  const std::vector<Index>& fixed_dofs() const { return fixed_dofs_; }
+  const std::vector<double>& fixed_dof_values() const { return fixed_dof_values_; }
   const BasisTransform<d>& basis() const { return T_; }
   Index contact_node(Index c) const { return node_[c]; }
   Index contact_of_node(Index i) const { return contact_of_node_[i]; }
@@ -110,7 +111,11 @@ class ContactProblem {
   }
   bool has_slip_origin() const { return !origin_.empty(); }
   double energy_offset() const { return energy_offset_; }
-  std::size_t memory_bytes() const { return A_.memory_bytes() + sizeof(double) * (Dinv_.size() + 3 * f_.size()); }
+  std::size_t memory_bytes() const {
+    return A_.memory_bytes() + sizeof(double) * (Dinv_.size() + f_.size() + gap_.size() * 3 + fixed_dof_values_.size()) +
+           sizeof(Index) * (fixed_dofs_.size() + node_.size()) + sizeof(ColIndex) * contact_of_node_.size() + fixed_.size() + inert_.size() +
+           base_mask_.size();
+  }
 
   // Tresca bounds in force: the coefficients (a Tresca law), or F |s_n| (Algorithm 1).
   void set_bounds_to_coefficients() { bound_ = coef_; }
@@ -146,9 +151,11 @@ class ContactProblem {
 
   BlockMatrix<d> A_;
   BasisTransform<d> T_;
-  std::vector<double> f_, Dinv_, fixed_values_;
+  std::vector<double> f_, Dinv_, fixed_dof_values_;
+  std::vector<Index> fixed_dofs_;
   std::vector<std::uint8_t> fixed_, inert_, base_mask_;
-  std::vector<Index> node_, contact_of_node_;
+  std::vector<Index> node_;
+  std::vector<ColIndex> contact_of_node_;  // 32 bits: nodes fit a ColIndex (check_block_count)
   std::vector<double> gap_, coef_, bound_;
   std::vector<double> origin_;  // nc * d in the frames, empty without a previous step
   std::vector<TangentMask> free_;

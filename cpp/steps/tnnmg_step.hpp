@@ -61,7 +61,7 @@ class TnnmgStep {
       built_.hessian = hessian_;
     }
     pc.lap(Phase::CoarseUpdate);
-    C_.correction(opt_, r_.data(), mask_.data(), lo_.data(), hi_.data(), false, w_.data(), P_.num_nodes());
+    C_.correction(opt_, r_.data(), mask_.data(), NodeBounds{}, false, w_.data(), P_.num_nodes());
     const double e_before = frozen_energy(u.data(), tmp_.data());
     step_ = line_search();
     for (std::size_t k = 0; k < u.size(); ++k) { u[k] += step_ * w_[k]; tmp_[k] += step_ * Aw_[k]; }
