@@ -72,7 +72,7 @@ class ContactProblem {
     T_.to_local(f_.data());
     eliminate_dirichlet(values.data());
     A_.find_diagonal();
-    invert_diagonal<d>(A_, Dinv_, inert_, max_diagonal<d>(A_));
+    keep_special_inverses();
     base_mask_.assign(n * d, 1);
     for (Index k = 0; k < n * d; ++k) base_mask_[k] = fixed_[k] ? 0 : 1;
     for (Index k = 0; k < n * d; ++k)
@@ -83,7 +83,15 @@ class ContactProblem {
   Index num_contact() const { return (Index)node_.size(); }
   const BlockMatrix<d>& matrix() const { return A_; }
   const std::vector<double>& load() const { return f_; }
-  const std::vector<double>& Dinv() const { return Dinv_; }
+  // The inverse of the diagonal block of row i (invert_diagonal's): formed from the block itself
+  // in the sweep -- the same bits as a stored one, and 16 bytes a dof less to hold and to stream
+  // (issue 15) -- except on the rows where it is not the plain inverse (inert components,
+  // pseudo-inverses), kept here.
+  Mat<d> diagonal_inverse(Index i) const {
+    if (!special_row_[i]) return Mat<d>(A_.block(A_.diag[i])).inverse();
+    const auto it = std::lower_bound(special_.begin(), special_.end(), i, [](const auto& e, Index r) { return e.first < r; });
+    return it->second;
+  }
   const std::vector<std::uint8_t>& base_mask() const { return base_mask_; }  // 0 on Dirichlet dofs (local)
   const std::vector<std::uint8_t>& fixed() const { return fixed_; }
   // The Dirichlet dofs (local numbering) and their values: a list, not a vector over all dofs.
@@ -112,8 +120,9 @@ class ContactProblem {
   bool has_slip_origin() const { return !origin_.empty(); }
   double energy_offset() const { return energy_offset_; }
   std::size_t memory_bytes() const {
-    return A_.memory_bytes() + sizeof(double) * (Dinv_.size() + f_.size() + gap_.size() * 3 + fixed_dof_values_.size()) +
-           sizeof(Index) * (fixed_dofs_.size() + node_.size()) + sizeof(ColIndex) * contact_of_node_.size() + fixed_.size() + inert_.size() +
+    return A_.memory_bytes() + sizeof(double) * (f_.size() + gap_.size() * 3 + fixed_dof_values_.size()) + special_row_.size() +
+           sizeof(special_[0]) * special_.size() +
+           sizeof(Index) * (fixed_dofs_.size() + node_.size()) + sizeof(ColIndex) * contact_of_node_.size() + fixed_.size() +
            base_mask_.size();
   }
 
@@ -123,6 +132,21 @@ class ContactProblem {
   double coefficient(Index c) const { return coef_[c]; }
 
  private:
+  void keep_special_inverses() {
+    const Index n = A_.rows;
+    const double thr = 1e-12 * max_diagonal<d>(A_);
+    special_row_.assign(n, 0);
+    special_.clear();
+    std::uint8_t inert[d];
+    for (Index i = 0; i < n; ++i) {
+      const Mat<d> M = diagonal_block_inverse<d>(A_, i, thr, inert);
+      bool plain = A_.diag[i] >= 0;
+      for (int c = 0; c < d; ++c) plain = plain && !inert[c];
+      if (plain) plain = M == Mat<d>(A_.block(A_.diag[i])).inverse();
+      if (!plain) { special_row_[i] = 1; special_.emplace_back(i, M); }
+    }
+  }
+
   void eliminate_dirichlet(const double* values) {
     const Index n = A_.rows;
     std::vector<double> v(n * d, 0.0), Av(n * d);
@@ -151,9 +175,11 @@ class ContactProblem {
 
   BlockMatrix<d> A_;
   BasisTransform<d> T_;
-  std::vector<double> f_, Dinv_, fixed_dof_values_;
+  std::vector<double> f_, fixed_dof_values_;
+  std::vector<std::uint8_t> special_row_;         // 1: the row's inverse is in special_
+  std::vector<std::pair<Index, Mat<d>>> special_;  // ascending rows
   std::vector<Index> fixed_dofs_;
-  std::vector<std::uint8_t> fixed_, inert_, base_mask_;
+  std::vector<std::uint8_t> fixed_, base_mask_;
   std::vector<Index> node_;
   std::vector<ColIndex> contact_of_node_;  // 32 bits: nodes fit a ColIndex (check_block_count)
   std::vector<double> gap_, coef_, bound_;

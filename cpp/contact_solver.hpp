@@ -52,7 +52,9 @@ class ContactSolver {
   bool renumbered() const { return !order_.back().identity(); }
   Monitor& monitor() { return mon_; }
   std::size_t memory_bytes() const {
-    std::size_t s = P_.memory_bytes() + H_.memory_bytes() + C_.memory_bytes() + sizeof(double) * 8 * P_.num_nodes() * d +
+    // the problem (matrix, load, masks), coarse levels and prolongations, coarse vectors, the fine
+    // iterate u, A u and the step's r, u_old (4 fine vectors and one mask), the orders
+    std::size_t s = P_.memory_bytes() + H_.memory_bytes() + C_.memory_bytes() + (sizeof(double) * 4 + 1) * P_.num_nodes() * d +
                     fine_coloured_.memory_bytes() + lexicographic_.memory_bytes();
     for (const Renumbering& R : order_) s += R.memory_bytes();
     return s;
@@ -156,7 +158,7 @@ class ContactSolver {
         // each coarse level (not the coarsest: it is factorized) by the colours of its Galerkin pattern
         BlockMatrix<d> pattern;
         for (int l = (int)P.size() - 1; l >= 1; --l) {
-          pattern = galerkin_pattern<d>(l + 1 == (int)P.size() ? A : pattern, P[l], transpose(P[l]));
+          pattern = galerkin_pattern<d>(l + 1 == (int)P.size() ? A : pattern, P[l], TransposedPattern<d>(P[l]));
           order[l] = Renumbering::by_colours<d>(pattern);
           order[l].permute_matrix(pattern);
           order[l].permute_columns(P[l]);
