@@ -9,7 +9,7 @@ time: seconds per cycle for lexicographic (1, 2 threads), coloured in the user's
 issue 15 before renumbering) and coloured stored by colours (1, 2 threads), the runs of one level
 interleaved (the machine may be shared: the load average is printed with every row; medians over
 --repeats); next to it the bytes one fine sweep must read (matrix blocks, column indices, row
-pointers, diagonal positions, inverted diagonal blocks, iterate and load) over the measured time of
+pointers, diagonal positions, iterate read and written, load) over the measured time of
 a sweep, the bytes of a whole cycle (cycle_bytes: every sweep, product, restriction and
 prolongation on every level) over the time of a cycle, and the core's stream triad a = b + 1.5 c
 on 1 and 2 threads (and numpy's) measured in the same run, before and after. Ends with the whole
@@ -85,9 +85,12 @@ def cycle_bytes(p, S) -> dict:
     fine_n = p.mesh.num_points
     A = matrix_bytes(S.fine_matrix())
     vec = lambda n: 8 * d * n
+    # coarse sweeps read stored inverted diagonal blocks; the fine one forms them from the diagonal
+    # block (its position is in the matrix's bytes)
     sweep = lambda M, n: M + 8 * d * d * n + 3 * vec(n)
+    fine_sweep = lambda M, n: M + 3 * vec(n)
     prod = lambda M, n: M + 2 * vec(n)
-    fine = nu * sweep(A, fine_n) + 2 * prod(A, fine_n)
+    fine = nu * fine_sweep(A, fine_n) + 2 * prod(A, fine_n)
     coarse = 0
     T = p.hierarchy.transfers
     fine_transfer = transfer_bytes(T[-1], d) + vec(T[-1].n_fine) + vec(T[-1].n_coarse)
@@ -100,7 +103,7 @@ def cycle_bytes(p, S) -> dict:
         tb = transfer_bytes(T[l - 1], d) + vec(T[l - 1].n_fine) + vec(T[l - 1].n_coarse)
         coarse += smooth * nu * sweep(M, n) + restrict * (prod(M, n) + 2 * tb)
     return {"fine": fine, "coarse": coarse, "total": fine + coarse,
-            "sweep": sweep(A, fine_n)}
+            "sweep": fine_sweep(A, fine_n)}
 
 
 def time_level(make, label, repeats, threads, stream):

@@ -5,6 +5,9 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 #include <utility>
+#ifdef __GLIBC__
+#include <malloc.h>
+#endif
 #include "bandwidth.hpp"
 #include "contact_solver.hpp"
 #include "fem/assembly.hpp"
@@ -94,12 +97,19 @@ py::dict record_to_dict(const CycleRecord& r) {
   return o;
 }
 
+// The vector handed over to numpy without a copy (the array owns it).
+py::array_t<double> moved_to_numpy(std::vector<double>&& v, std::vector<py::ssize_t> shape) {
+  auto* owned = new std::vector<double>(std::move(v));
+  py::capsule free_it(owned, [](void* p) { delete static_cast<std::vector<double>*>(p); });
+  return py::array_t<double>(shape, owned->data(), free_it);
+}
+
 template <int d>
-py::dict result_to_dict(const SolveResult& R, const ContactSolver<d>& S) {
+py::dict result_to_dict(SolveResult& R, const ContactSolver<d>& S) {
   const Index n = S.num_nodes(), nc = S.num_contact();
   py::dict out;
   out["frames"] = frames_array<d>(S);
-  out["u"] = to_numpy(R.u, {(py::ssize_t)n, d});
+  out["u"] = moved_to_numpy(std::move(R.u), {(py::ssize_t)n, d});
   out["contact_force"] = to_numpy(R.contact_force, {(py::ssize_t)nc, d});
   out["friction_bound"] = to_numpy(R.friction_bound, {(py::ssize_t)nc});
   out["state"] = to_numpy(R.state, {(py::ssize_t)nc});
@@ -433,6 +443,13 @@ py::dict refined_to_dict(const RefinedMesh& R, int d, int k, int kf) {
 
 PYBIND11_MODULE(_core, m) {
   m.doc() = "contactmg compiled core";
+#ifdef __GLIBC__
+  // Allocations of 1 MiB and more get pages of their own and go back to the system when freed.
+  // glibc's default threshold grows to 32 MiB after the first large free, and then the level-sized
+  // temporaries of setup and of a solve's results stayed in the heap: 28 MiB of the peak at level 9
+  // (issue 15).
+  mallopt(M_MMAP_THRESHOLD, 1 << 20);
+#endif
   bind_dim<2>(m);
   bind_dim<3>(m);
 

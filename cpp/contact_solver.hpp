@@ -248,7 +248,9 @@ class ContactSolver {
     R.rebuilds = H_.rebuilds() - rebuilds0_;
     R.rebuild_seconds = H_.rebuild_seconds() - rebuild_seconds0_;
     R.phase_seconds = mon_.phase_seconds();
-    R.u = it_.u;
+    // u in the user's numbering, written once (no second copy to permute in place: the end of a
+    // solve was the peak of a level-9 run, issue 15)
+    R.u = order_.back().to_storage_inverse(it_.u.data(), num_nodes(), d);
     R.contact_force.assign(nc * d, 0.0);
     R.friction_bound.assign(nc, 0.0);
     R.state.assign(nc, 0);
@@ -260,9 +262,12 @@ class ContactSolver {
       R.state[c] = (std::int8_t)node_state<d>(p, it_.u.data() + k);
       R.friction_bound[c] = L::bound(p, R.state[c] != 0, f[k] - it_.Au[k]);
     }
-    P_.basis().to_canonical(R.u.data());
-    order_.back().to_user_in_place(R.u, d);
-    reference_.clear();
+    const BasisTransform<d>& T = P_.basis();
+    for (Index c = 0; c < T.num_blocks(); ++c) {
+      VecMap<d> ui(R.u.data() + order_.back().to_user(T.node(c)) * d);
+      ui = T.block(c) * Vec<d>(ui);
+    }
+    std::vector<double>().swap(reference_);
   }
 
   Law law_;

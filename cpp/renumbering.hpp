@@ -45,6 +45,15 @@ class Renumbering {
       for (Index k = 0; k < n; ++k) std::copy(user + old_of_new_[k] * width, user + (old_of_new_[k] + 1) * width, s.data() + k * width);
     return s;
   }
+  // user[old] = stored[new]: a copy in the user's numbering
+  template <class T>
+  std::vector<T> to_storage_inverse(const T* stored, Index n, int width) const {
+    std::vector<T> u(stored, stored + (identity() ? n * width : 0));
+    if (identity()) return u;
+    u.resize(n * width);
+    for (Index k = 0; k < n; ++k) std::copy(stored + k * width, stored + (k + 1) * width, u.data() + old_of_new_[k] * width);
+    return u;
+  }
   template <class T>
   void to_user_in_place(std::vector<T>& v, int width) const {
     if (identity()) return;
