@@ -76,8 +76,10 @@ class ContactSolver {
       start(u0);
       P_.set_bounds_to_coefficients();
       SolveResult R;
-      MonotoneMultigridStep<d, Law> step(P_, H_, C_, built_, it_, cyc, fine_order(cyc.ordering));
-      run_loop(step, stored(opt), mon_, R, 0);
+      {  // the step's vectors are freed before the result is written (the peak of a solve)
+        MonotoneMultigridStep<d, Law> step(P_, H_, C_, built_, it_, cyc, fine_order(cyc.ordering));
+        run_loop(step, stored(opt), mon_, R, 0);
+      }
       finish<Law>(R);
       return R;
     });
@@ -192,6 +194,10 @@ class ContactSolver {
     // the lexicographic order of a renumbered level is the user's order (fine: made on first use)
     for (int l = 1; l + 1 < (int)order_.size(); ++l)
       if (!order_[l].identity()) C_.set_rows_to_smooth(l, SweepOrder(order_[l].new_of_old()));
+    // the storage-order copies are in P_ now: freed before the first Galerkin products
+    std::vector<double>().swap(S.f);
+    std::vector<double>().swap(S.fixed_values);
+    std::vector<std::uint8_t>().swap(S.fixed);
     built_.mask = P_.base_mask();
     H_.rebuild(P_.matrix(), built_.mask.data());
   }

@@ -117,7 +117,7 @@ class MonotoneMultigridStep {
     Smoother::sweep(P_, u.data(), true, order_);
     for (std::size_t k = 0; k < u.size(); ++k) std::swap(u[k], old_[k]);
     for (std::size_t k = 0; k < u.size(); ++k) old_[k] -= u[k];
-    std::vector<double> tmp(u.size());
+    std::vector<double>& tmp = r_;  // the residual is not needed after a cycle: no new fine vector
     P_.matrix().multiply(old_.data(), tmp.data());
     double e = 0;
     for (std::size_t k = 0; k < u.size(); ++k) e += old_[k] * tmp[k];
