@@ -5,11 +5,15 @@ two orders, and the memory per dof by owner.
     python benchmarks/parallel_bandwidth.py counts [--levels 3 4 5 6 7 8 9] [--json out.json]
     python benchmarks/parallel_bandwidth.py memory --level 9 [--dim 2|3] [--json out.json]
 
-time: seconds per cycle for (ordering x threads), the runs of one level interleaved (the machine
-is shared: the load average is printed with every row; medians over --repeats); next to it the
-bytes one fine sweep must read (matrix blocks, column indices, row pointers, diagonal positions,
-inverted diagonal blocks, iterate and load) over the measured time of a sweep, and a stream-like
-numpy triad a = b + s c on arrays far larger than the caches, 1 thread, in the same process.
+time: seconds per cycle for lexicographic (1, 2 threads), coloured in the user's order (1 thread:
+issue 15 before renumbering) and coloured stored by colours (1, 2 threads), the runs of one level
+interleaved (the machine may be shared: the load average is printed with every row; medians over
+--repeats); next to it the bytes one fine sweep must read (matrix blocks, column indices, row
+pointers, diagonal positions, iterate read and written, load) over the measured time of
+a sweep, the bytes of a whole cycle (cycle_bytes: every sweep, product, restriction and
+prolongation on every level) over the time of a cycle, and the core's stream triad a = b + 1.5 c
+on 1 and 2 threads (and numpy's) measured in the same run, before and after. Ends with the whole
+table in markdown.
 memory: peak resident memory of a Hertz solve (the CLI's path) in a fresh process and what each
 owner holds after the solve.
 """
@@ -31,7 +35,7 @@ def load() -> str:
 
 
 def triad_gbs(n: int = 20_000_000, repeats: int = 5) -> float:
-    """Bytes moved by a = b + s c (read b, c; write a: 3 x 8 bytes per entry) over the best time."""
+    """numpy: bytes moved by a = b + s c in two passes (5 x 8 bytes per entry) over the best time."""
     b, c, a = np.random.rand(n), np.random.rand(n), np.empty(n)
     best = np.inf
     for _ in range(repeats):
@@ -42,44 +46,132 @@ def triad_gbs(n: int = 20_000_000, repeats: int = 5) -> float:
     return 5 * 8 * n / best / 1e9
 
 
-def time_level(make, label, repeats, orders, threads):
-    p = make()
-    S = p.solver
-    rows = {}
-    for rep in range(repeats):
-        for o in orders:
-            for t in threads:
-                r = p.solve("nmg", ordering=o, threads=t)
-                rows.setdefault((o, t), []).append(r)
-    out = []
+def stream_rates() -> dict:
+    """The core's triad a = b + 1.5 c (24 bytes an entry, 40M doubles) on 1 and 2 threads, and numpy's."""
+    from contactmg import _core
+    out = {"numpy_1": triad_gbs()}
+    if hasattr(_core, "stream_triad"):
+        for t in (1, 2):
+            out[f"core_{t}"] = _core.stream_triad(40_000_000, 5, t)
+    return out
+
+
+# The configurations of a level: (label, storage order of the core solver, ordering of the sweeps)
+CONFIGS = (("lexicographic", "lexicographic", "lexicographic"),
+           ("coloured, user order", "lexicographic", "coloured"),  # issue 15 before renumbering
+           ("coloured, by colours", "coloured", "coloured"))
+
+
+def matrix_bytes(m) -> int:
+    return m.memory_bytes()
+
+
+def transfer_bytes(t, d: int) -> int:
+    # the core holds a prolongation as d x d blocks with 32-bit columns and 64-bit row pointers
+    return len(t.parent) * (8 * d * d + 4) + 8 * (t.n_fine + 1)
+
+
+def cycle_bytes(p, S) -> dict:
+    """Bytes a cycle must read once per sweep and product on every level (a model of the passes,
+    not a measurement): a sweep reads the matrix, the inverted diagonal blocks, the iterate and the
+    right-hand side and writes the iterate; a product reads the matrix and x and writes y; a
+    restriction and a prolongation read the prolongation and both vectors. F-cycle: coarse level l
+    of T is smoothed T - l + 1 times and restricted from T - l + 2 times; V: once each."""
     d = p.mesh.dim
-    n = p.mesh.num_points
-    mat = S.fine_matrix().memory_bytes()
-    vec = 8 * d * n * (3 + d)  # iterate read + written, load, inverted diagonal blocks (d x d)
-    for (o, t), rs in rows.items():
+    opt = p.default_cycle
+    nu = opt.nu1 + opt.nu2
+    levels = S.num_levels - 1  # coarse levels 0 .. levels - 1
+    top = levels - 1
+    fine_n = p.mesh.num_points
+    A = matrix_bytes(S.fine_matrix())
+    vec = lambda n: 8 * d * n
+    # coarse sweeps read stored inverted diagonal blocks; the fine one forms them from the diagonal
+    # block (its position is in the matrix's bytes)
+    sweep = lambda M, n: M + 8 * d * d * n + 3 * vec(n)
+    fine_sweep = lambda M, n: M + 3 * vec(n)
+    prod = lambda M, n: M + 2 * vec(n)
+    fine = nu * fine_sweep(A, fine_n) + 2 * prod(A, fine_n)
+    coarse = 0
+    T = p.hierarchy.transfers
+    fine_transfer = transfer_bytes(T[-1], d) + vec(T[-1].n_fine) + vec(T[-1].n_coarse)
+    fine += 2 * fine_transfer
+    for l in range(1, levels):
+        n = T[l - 1].n_fine  # T[l - 1] prolongs level l - 1 to level l
+        M = matrix_bytes(S.coarse_matrix(l))
+        smooth = (top - l + 1) if opt.cycle == "F" else 1
+        restrict = (top - l + 2) if opt.cycle == "F" else 1
+        tb = transfer_bytes(T[l - 1], d) + vec(T[l - 1].n_fine) + vec(T[l - 1].n_coarse)
+        coarse += smooth * nu * sweep(M, n) + restrict * (prod(M, n) + 2 * tb)
+    return {"fine": fine, "coarse": coarse, "total": fine + coarse,
+            "sweep": fine_sweep(A, fine_n)}
+
+
+def time_level(make, label, repeats, threads, stream):
+    problems = {}
+    for name, storage, ordering in CONFIGS:
+        p = make()
+        p.default_ordering = storage
+        p.solver  # built now, outside the timings
+        problems[name] = (p, ordering)
+    rows = {}
+    for rep in range(repeats):  # interleaved: the machine is shared
+        for name, (p, ordering) in problems.items():
+            for t in threads:
+                if name == "coloured, user order" and t != 1:
+                    continue
+                r = p.solve("nmg", ordering=ordering, threads=t)
+                rows.setdefault((name, t), []).append(r)
+    out = []
+    for (name, t), rs in rows.items():
+        p, _ = problems[name]
+        S = p.solver
+        d, n = p.mesh.dim, p.mesh.num_points
+        nu = p.default_cycle.nu1 + p.default_cycle.nu2
+        b = cycle_bytes(p, S)
         spc = float(np.median([r.solve_seconds / r.cycles for r in rs]))
-        sweeps = float(np.median([(r.phase_seconds["presmooth"] + r.phase_seconds["postsmooth"]) / (6 * r.cycles) for r in rs]))
-        out.append(dict(case=label, dofs=d * n, ordering=o, threads=t, cycles=rs[0].cycles,
-                        seconds_per_cycle=spc, seconds_per_fine_sweep=sweeps,
-                        sweep_bytes=mat + vec, sweep_gbs=(mat + vec) / sweeps / 1e9,
+        sweeps = float(np.median([(r.phase_seconds["presmooth"] + r.phase_seconds["postsmooth"]) / (nu * r.cycles) for r in rs]))
+        rate = stream.get(f"core_{t}", stream["numpy_1"]) * 1e9
+        out.append(dict(case=label, dofs=d * n, config=name, renumbered=bool(getattr(S, "renumbered", False)), threads=t,
+                        cycles=rs[0].cycles, seconds_per_cycle=spc, seconds_per_fine_sweep=sweeps,
+                        sweep_bytes=b["sweep"], sweep_gbs=b["sweep"] / sweeps / 1e9, cycle_bytes=b["total"],
+                        cycle_gbs=b["total"] / spc / 1e9, stream_gbs=rate / 1e9, cycle_over_stream=spc / (b["total"] / rate),
                         converged=all(r.converged for r in rs), load=load()))
         print(json.dumps(out[-1]), flush=True)
+    base = {(r["config"], r["threads"]): r["seconds_per_cycle"] for r in out}
+    for r in out:
+        r["speedup_vs_lex_1"] = base[("lexicographic", 1)] / r["seconds_per_cycle"]
     return out
+
+
+def table(res) -> str:
+    s = res["stream"]
+    lines = [f"stream triad GB/s: core 1 thread {s.get('core_1', float('nan')):.1f}, 2 threads {s.get('core_2', float('nan')):.1f}, "
+             f"numpy 1 thread {s['numpy_1']:.1f}; after: {res['stream_after'].get('core_1', float('nan')):.1f} / "
+             f"{res['stream_after'].get('core_2', float('nan')):.1f}; load average {res['load_before']} -> {res['load_after']}", "",
+             "| case | dofs | config | threads | cycles | s/cycle | vs lex 1 thr | s/fine sweep | sweep GB/s | cycle MB | cycle GB/s | cycle / stream time | load |",
+             "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
+    for r in res["rows"]:
+        lines.append(f"| {r['case']} | {r['dofs']:,} | {r['config']} | {r['threads']} | {r['cycles']} | {r['seconds_per_cycle']:.3f} | "
+                     f"{r['speedup_vs_lex_1']:.2f}x | {r['seconds_per_fine_sweep']:.4f} | {r['sweep_gbs']:.2f} | "
+                     f"{r['cycle_bytes'] / 1e6:.0f} | {r['cycle_gbs']:.2f} | {r['cycle_over_stream']:.2f} | {r['load']} |")
+    return "\n".join(lines)
 
 
 def cmd_time(args):
     from contactmg.hertz import hertz_problem
     from contactmg.sphere import sphere_problem
-    res = {"triad_gbs_1thread": triad_gbs(), "load_before": load(), "rows": []}
-    print("triad GB/s (1 thread):", round(res["triad_gbs_1thread"], 2), "load", load(), flush=True)
-    orders, threads = ("lexicographic", "coloured"), (1, 2)
+    res = {"stream": stream_rates(), "load_before": load(), "rows": []}
+    print("stream GB/s:", {k: round(v, 2) for k, v in res["stream"].items()}, "load", load(), flush=True)
+    threads = (1, 2)
     for lev in args.levels:
-        res["rows"] += time_level(lambda: hertz_problem("triangle", lev, 0.4), f"hertz-2d-L{lev}", args.repeats, orders, threads)
+        res["rows"] += time_level(lambda: hertz_problem("triangle", lev, 0.4), f"hertz-2d-L{lev}", args.repeats, threads, res["stream"])
     for lev in args.levels3d:
-        res["rows"] += time_level(lambda: sphere_problem(levels=lev, friction=0.4), f"sphere-3d-L{lev}", args.repeats, orders, threads)
-    res["triad_gbs_1thread_after"] = triad_gbs()
+        res["rows"] += time_level(lambda: sphere_problem(levels=lev, friction=0.4), f"sphere-3d-L{lev}", args.repeats, threads,
+                                  res["stream"])
+    res["stream_after"] = stream_rates()
     res["load_after"] = load()
-    print("triad GB/s after:", round(res["triad_gbs_1thread_after"], 2), "load", load())
+    print()
+    print(table(res))
     return res
 
 
@@ -90,7 +182,9 @@ def cmd_counts(args):
         for F in (0.4, 5.0) if not args.f else args.f:
             row = {"level": lev, "F": F}
             for o in ("lexicographic", "coloured"):
-                r = hertz_problem("triangle", lev, F).solve("nmg", ordering=o)
+                p = hertz_problem("triangle", lev, F)
+                p.default_ordering = o
+                r = p.solve("nmg", ordering=o)
                 row[o] = r.cycles if r.converged else f"not converged: {r.status}"
             print(json.dumps(row), flush=True)
             rows.append(row)
@@ -100,14 +194,27 @@ def cmd_counts(args):
 MEMORY_WORKER = r'''
 import json, resource, sys, gc
 import numpy as np
+def status(key):  # VmRSS (now) or VmHWM (peak so far) in bytes
+    with open("/proc/self/status") as fh:
+        for line in fh:
+            if line.startswith(key + ":"):
+                return int(line.split()[1]) * 1024
+stages = {}
+def stage(name):
+    stages[name] = {"rss": status("VmRSS"), "peak": status("VmHWM")}
 dim, level = int(sys.argv[1]), int(sys.argv[2])
+stage("imports")
 if dim == 2:
     from contactmg.hertz import hertz_problem
     p = hertz_problem("triangle", level, 0.4)
 else:
     from contactmg.sphere import sphere_problem
     p = sphere_problem(levels=level, friction=0.4)
+stage("problem")
+p.solver
+stage("core solver")
 r = p.solve("nmg")
+stage("solve")
 peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
 d, n = p.mesh.dim, p.mesh.num_points
 S = p.solver
@@ -124,19 +231,39 @@ print(json.dumps(dict(dim=dim, level=level, dofs=d * n, cycles=r.cycles, converg
                       peak_bytes_per_dof=peak / (d * n), fine_matrix=fine, coarse_matrices=coarse,
                       core_total=core, core_transfers_vectors_dinv=core - fine - coarse, python_matrix_copy=python_A,
                       mesh_hierarchy_python=meshes, transfers_python=transfers, problem_vectors_python=problem_vectors,
-                      results=results)))
+                      results=results, stages=stages)))
 '''
 
 
+def cli_peak_rss(dim: int, level: int) -> int:
+    """Peak resident bytes of the CLI solve itself (`contactmg hertz --levels L` / `sphere --cell hexahedron`)
+    in a fresh process."""
+    cmd = [sys.executable, "-m", "contactmg"] + (["hertz", "--levels", str(level)] if dim == 2 else
+                                                 ["sphere", "--cell", "hexahedron", "--levels", str(level)]) + ["--json", "-", "-q"]
+    before = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+    out = subprocess.run(cmd, capture_output=True, text=True)
+    if out.returncode != 0:
+        raise SystemExit(out.stderr)
+    peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+    # ru_maxrss of children is the largest of any child so far: run this first
+    return max(peak, before) * 1024
+
+
 def cmd_memory(args):
+    cli = cli_peak_rss(args.dim, args.level)
     out = subprocess.run([sys.executable, "-c", MEMORY_WORKER, str(args.dim), str(args.level)], capture_output=True, text=True)
     if out.returncode != 0:
         raise SystemExit(out.stderr)
     res = json.loads(out.stdout.strip().splitlines()[-1])
+    res["cli_peak_rss_bytes"] = cli
+    res["cli_peak_bytes_per_dof"] = cli / res["dofs"]
     dofs = res["dofs"]
     for k, v in res.items():
         if isinstance(v, int) and k not in ("dim", "level", "dofs", "cycles"):
             print(f"{k:32s} {v / 2**20:9.1f} MiB {v / dofs:7.1f} B/dof")
+    for name, st in res["stages"].items():
+        print(f"after {name:24s} rss {st['rss'] / 2**20:9.1f} MiB  peak so far {st['peak'] / 2**20:9.1f} MiB "
+              f"({st['peak'] / dofs:6.1f} B/dof)")
     return res
 
 

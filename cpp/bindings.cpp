@@ -5,6 +5,10 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 #include <utility>
+#ifdef __GLIBC__
+#include <malloc.h>
+#endif
+#include "bandwidth.hpp"
 #include "contact_solver.hpp"
 #include "fem/assembly.hpp"
 #include "fem/bisection.hpp"
@@ -95,12 +99,19 @@ py::dict record_to_dict(const CycleRecord& r) {
   return o;
 }
 
+// The vector handed over to numpy without a copy (the array owns it).
+py::array_t<double> moved_to_numpy(std::vector<double>&& v, std::vector<py::ssize_t> shape) {
+  auto* owned = new std::vector<double>(std::move(v));
+  py::capsule free_it(owned, [](void* p) { delete static_cast<std::vector<double>*>(p); });
+  return py::array_t<double>(shape, owned->data(), free_it);
+}
+
 template <int d>
-py::dict result_to_dict(const SolveResult& R, const ContactSolver<d>& S) {
+py::dict result_to_dict(SolveResult& R, const ContactSolver<d>& S) {
   const Index n = S.num_nodes(), nc = S.num_contact();
   py::dict out;
   out["frames"] = frames_array<d>(S);
-  out["u"] = to_numpy(R.u, {(py::ssize_t)n, d});
+  out["u"] = moved_to_numpy(std::move(R.u), {(py::ssize_t)n, d});
   out["contact_force"] = to_numpy(R.contact_force, {(py::ssize_t)nc, d});
   out["friction_bound"] = to_numpy(R.friction_bound, {(py::ssize_t)nc});
   out["state"] = to_numpy(R.state, {(py::ssize_t)nc});
@@ -237,12 +248,14 @@ void bind_dim(py::module_& m) {
              BM fine = take_matrix ? std::exchange(A, BM()) : BM(A);
              return new CS(std::move(fine), f.data(), fixed.data(), fixed_values.data(), cn, normals.data(), gaps.data(), coefficients.data(),
                            parse_law(law), T, co, frame_fixed.is_none() ? nullptr : ff.data(),
-                           frame_fixed.is_none() ? nullptr : fv.data());
+                           frame_fixed.is_none() ? nullptr : fv.data(), co.ordering == Ordering::Coloured);
            }),
            py::arg("A"), py::arg("load"), py::arg("fixed"), py::arg("fixed_values"), py::arg("contact_nodes"),
            py::arg("normals"), py::arg("gaps"), py::arg("coefficients"), py::arg("law"), py::arg("transfers"),
            py::arg("cycle") = "V", py::arg("nu1") = 3, py::arg("nu2") = 3, py::arg("frame_fixed") = py::none(),
            py::arg("frame_values") = py::none(), py::arg("ordering") = "lexicographic", py::arg("take_matrix") = false,
+           "ordering coloured also stores every level but the coarsest by colours (each colour one contiguous range "
+           "of rows, so a coloured sweep streams memory; inputs and outputs keep the caller's numbering); "
            "fixed/fixed_values: Dirichlet components in canonical axes (a contact node keeps its contact condition "
            "in its free directions); frame_fixed/frame_values (nc, d): components fixed in the contact frames")
       .def("solve", [](CS& S, py::object u0, double tol, double rtol, int max_cycles, bool fixed_point, double fp_tol,
@@ -337,11 +350,11 @@ void bind_dim(py::module_& m) {
                              "the components of each contact node fixed in its frame (num_contact, d)")
       .def("coarse_matrix", [](const CS& S, int l) {
              if (l < 0 || l >= S.hierarchy().num_coarse_levels()) throw py::index_error("no such coarse level");
-             return std::make_shared<BM>(S.hierarchy().matrix(l));
+             return std::make_shared<BM>(S.coarse_matrix_in_user_order(l));
            })
       .def("set_rows_to_smooth", [](CS& S, int l, IArr rows) {
              if (l < 0 || l >= S.hierarchy().num_coarse_levels()) throw py::index_error("no such coarse level");
-             S.coarse_cycle().set_rows_to_smooth(l, SweepOrder(std::vector<Index>(rows.data(), rows.data() + rows.size())));
+             S.set_rows_to_smooth(l, std::vector<Index>(rows.data(), rows.data() + rows.size()));
            }, py::arg("level"), py::arg("rows"), "the rows smoothed on coarse level `level` (all by default)")
       .def("set_slip_origin", [](CS& S, py::object u_prev) {
              if (u_prev.is_none()) { S.set_slip_origin(nullptr); return; }
@@ -352,7 +365,8 @@ void bind_dim(py::module_& m) {
            "Load paths: the previous step's displacement (n, d), canonical; friction then acts on the slip "
            "increment u_T - u_prev_T and stick means no slip in this step. None: from the reference configuration")
       .def_property_readonly("has_slip_origin", &CS::has_slip_origin)
-      .def("fine_matrix", [](const CS& S) { return std::make_shared<BM>(S.fine_matrix()); })
+      .def("fine_matrix", [](const CS& S) { return std::make_shared<BM>(S.fine_matrix_in_user_order()); })
+      .def_property_readonly("renumbered", &CS::renumbered, "whether the levels are stored by colours")
       .def("memory_bytes", &CS::memory_bytes)
       .def_property_readonly("num_colours", &CS::num_fine_colours, "colours of the fine block graph (coloured sweeps)")
       .def("rebuild_coarse", &CS::rebuild_coarse, "Full Galerkin rebuild of the coarse matrices for the current truncation")
@@ -374,7 +388,7 @@ void bind_dim(py::module_& m) {
            "frames, Dirichlet dofs masked): PCG preconditioned by the truncated linear cycle for K w = M r, r in the "
            "frames. Returns (w, energies after each iteration)")
       .def("fine_lines", [](CS& S, bool lines) {
-             const LineSet& L = S.fine_lines(lines);
+             const LineSet L = S.fine_lines(lines);
              py::list out;
              for (Index k = 0; k < L.num_lines(); ++k)
                out.append(to_numpy(std::vector<Index>(L.nodes.begin() + L.ptr[k], L.nodes.begin() + L.ptr[k + 1]),
@@ -383,7 +397,7 @@ void bind_dim(py::module_& m) {
            }, py::arg("lines") = true, "the lines of the fine line smoother (node ids in chain order)")
       .def("coarse_lines", [](const CS& S, int l) {
              if (l < 0 || l >= S.hierarchy().num_coarse_levels()) throw py::index_error("no such coarse level");
-             const LineSet& L = S.hierarchy().level(l).lines.lines();
+             const LineSet L = S.coarse_lines(l);
              py::list out;
              for (Index k = 0; k < L.num_lines(); ++k)
                out.append(to_numpy(std::vector<Index>(L.nodes.begin() + L.ptr[k], L.nodes.begin() + L.ptr[k + 1]),
@@ -501,11 +515,25 @@ py::dict refined_to_dict(const RefinedMesh& R, int d, int k, int kf) {
 
 PYBIND11_MODULE(_core, m) {
   m.doc() = "contactmg compiled core";
+#ifdef __GLIBC__
+  // Allocations of 1 MiB and more get pages of their own and go back to the system when freed.
+  // glibc's default threshold grows to 32 MiB after the first large free, and then the level-sized
+  // temporaries of setup and of a solve's results stayed in the heap: 28 MiB of the peak at level 9
+  // (issue 15).
+  mallopt(M_MMAP_THRESHOLD, 1 << 20);
+#endif
   bind_dim<2>(m);
   bind_dim<3>(m);
 
   m.def("openmp", [] { return have_openmp(); }, "whether the core was built with OpenMP threads");
   m.def("max_threads", [] { return max_threads(); }, "the cores the threads of a solve may use (threads=0)");
+  m.def("stream_triad", [](Index n, int repeats, int threads) {
+    if (n < 1 || repeats < 1) throw InputError("stream_triad needs n >= 1 and repeats >= 1");
+    py::gil_scoped_release release;
+    ThreadScope team(threads);
+    return triad_bytes_per_second(n, repeats) / 1e9;
+  }, py::arg("n") = 40000000, py::arg("repeats") = 5, py::arg("threads") = 1,
+  "GB/s of the triad a = b + 1.5 c over n doubles on `threads` threads (best of `repeats`; 24 bytes an entry)");
   m.def("cell_table", [] {
     py::dict out;
     for (const CellInfo& c : cell_table()) {

@@ -52,6 +52,16 @@ struct BlockMatrix {
     });
   }
 
+  // r = b - A x in one pass (a product and a vector update fused)
+  void residual(const double* x, const double* b, double* r) const {
+    parallel_for(rows, [&](Index i) {
+      Vec<d> s = CVecMap<d>(b + d * i);
+      for (Index k = indptr[i]; k < indptr[i + 1]; ++k)
+        s.noalias() -= block(k) * CVecMap<d>(x + d * indices[k]);
+      VecMap<d>(r + d * i) = s;
+    });
+  }
+
   std::size_t memory_bytes() const {
     return sizeof(Index) * (indptr.size() + diag.size()) + sizeof(ColIndex) * indices.size() + sizeof(double) * values.size();
   }

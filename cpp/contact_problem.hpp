@@ -72,22 +72,31 @@ class ContactProblem {
     T_.to_local(f_.data());
     eliminate_dirichlet(values.data());
     A_.find_diagonal();
-    invert_diagonal<d>(A_, Dinv_, inert_, max_diagonal<d>(A_));
+    keep_special_inverses();
     base_mask_.assign(n * d, 1);
     for (Index k = 0; k < n * d; ++k) base_mask_[k] = fixed_[k] ? 0 : 1;
-    fixed_values_.assign(n * d, 0.0);
     for (Index k = 0; k < n * d; ++k)
-      if (fixed_[k]) fixed_values_[k] = values[k];
+      if (fixed_[k]) { fixed_dofs_.push_back(k); fixed_dof_values_.push_back(values[k]); }
   }
 
   Index num_nodes() const { return A_.rows; }
   Index num_contact() const { return (Index)node_.size(); }
   const BlockMatrix<d>& matrix() const { return A_; }
   const std::vector<double>& load() const { return f_; }
-  const std::vector<double>& Dinv() const { return Dinv_; }
+  // The inverse of the diagonal block of row i (invert_diagonal's): formed from the block itself
+  // in the sweep -- the same bits as a stored one, and 16 bytes a dof less to hold and to stream
+  // (issue 15) -- except on the rows where it is not the plain inverse (inert components,
+  // pseudo-inverses), kept here.
+  Mat<d> diagonal_inverse(Index i) const {
+    if (!special_row_[i]) return Mat<d>(A_.block(A_.diag[i])).inverse();
+    const auto it = std::lower_bound(special_.begin(), special_.end(), i, [](const auto& e, Index r) { return e.first < r; });
+    return it->second;
+  }
   const std::vector<std::uint8_t>& base_mask() const { return base_mask_; }  // 0 on Dirichlet dofs (local)
   const std::vector<std::uint8_t>& fixed() const { return fixed_; }
-  const std::vector<double>& fixed_values() const { return fixed_values_; }
+  // The Dirichlet dofs (local numbering) and their values: a list, not a vector over all dofs.
+  const std::vector<Index>& fixed_dofs() const { return fixed_dofs_; }
+  const std::vector<double>& fixed_dof_values() const { return fixed_dof_values_; }
   const BasisTransform<d>& basis() const { return T_; }
   Index contact_node(Index c) const { return node_[c]; }
   Index contact_of_node(Index i) const { return contact_of_node_[i]; }
@@ -110,7 +119,12 @@ class ContactProblem {
   }
   bool has_slip_origin() const { return !origin_.empty(); }
   double energy_offset() const { return energy_offset_; }
-  std::size_t memory_bytes() const { return A_.memory_bytes() + sizeof(double) * (Dinv_.size() + 3 * f_.size()); }
+  std::size_t memory_bytes() const {
+    return A_.memory_bytes() + sizeof(double) * (f_.size() + gap_.size() * 3 + fixed_dof_values_.size()) + special_row_.size() +
+           sizeof(special_[0]) * special_.size() +
+           sizeof(Index) * (fixed_dofs_.size() + node_.size()) + sizeof(ColIndex) * contact_of_node_.size() + fixed_.size() +
+           base_mask_.size();
+  }
 
   // Tresca bounds in force: the coefficients (a Tresca law), or F |s_n| (Algorithm 1).
   void set_bounds_to_coefficients() { bound_ = coef_; }
@@ -118,6 +132,21 @@ class ContactProblem {
   double coefficient(Index c) const { return coef_[c]; }
 
  private:
+  void keep_special_inverses() {
+    const Index n = A_.rows;
+    const double thr = 1e-12 * max_diagonal<d>(A_);
+    special_row_.assign(n, 0);
+    special_.clear();
+    std::uint8_t inert[d];
+    for (Index i = 0; i < n; ++i) {
+      const Mat<d> M = diagonal_block_inverse<d>(A_, i, thr, inert);
+      bool plain = A_.diag[i] >= 0;
+      for (int c = 0; c < d; ++c) plain = plain && !inert[c];
+      if (plain) plain = M == Mat<d>(A_.block(A_.diag[i])).inverse();
+      if (!plain) { special_row_[i] = 1; special_.emplace_back(i, M); }
+    }
+  }
+
   void eliminate_dirichlet(const double* values) {
     const Index n = A_.rows;
     std::vector<double> v(n * d, 0.0), Av(n * d);
@@ -146,9 +175,13 @@ class ContactProblem {
 
   BlockMatrix<d> A_;
   BasisTransform<d> T_;
-  std::vector<double> f_, Dinv_, fixed_values_;
-  std::vector<std::uint8_t> fixed_, inert_, base_mask_;
-  std::vector<Index> node_, contact_of_node_;
+  std::vector<double> f_, fixed_dof_values_;
+  std::vector<std::uint8_t> special_row_;         // 1: the row's inverse is in special_
+  std::vector<std::pair<Index, Mat<d>>> special_;  // ascending rows
+  std::vector<Index> fixed_dofs_;
+  std::vector<std::uint8_t> fixed_, base_mask_;
+  std::vector<Index> node_;
+  std::vector<ColIndex> contact_of_node_;  // 32 bits: nodes fit a ColIndex (check_block_count)
   std::vector<double> gap_, coef_, bound_;
   std::vector<double> origin_;  // nc * d in the frames, empty without a previous step
   std::vector<TangentMask> free_;

@@ -7,6 +7,7 @@
 #include "laws/law.hpp"
 #include "steps/fixed_point_step.hpp"
 #include <memory>
+#include "renumbering.hpp"
 #include "steps/tnnmg_step.hpp"
 
 namespace cmg {
@@ -20,34 +21,53 @@ class ContactSolver {
     std::vector<double> weight;
   };
 
+  // renumber: store every level but the coarsest by colours (renumbering.hpp); what goes in and
+  // out stays in the caller's numbering.
   ContactSolver(BlockMatrix<d> A, const double* f, const std::uint8_t* fixed, const double* fixed_values,
                 const std::vector<Index>& contact_nodes, const double* normals, const double* gaps, const double* coefficients,
                 Law law, const std::vector<Transfer>& transfers, CycleOptions cyc, const std::uint8_t* frame_fixed = nullptr,
-                const double* frame_values = nullptr)
-      : law_(law),
-        P_(std::move(A), f, fixed, fixed_values, contact_nodes, normals, gaps, coefficients, frame_fixed, frame_values),
-        H_(prolongations(transfers)),
-        C_(H_),
-        cyc_(cyc) {
-    built_.mask = P_.base_mask();
-    H_.rebuild(P_.matrix(), built_.mask.data());
-  }
+                const double* frame_values = nullptr, bool renumber = false)
+      : ContactSolver(Stored(std::move(A), f, fixed, fixed_values, contact_nodes, transfers, renumber), normals, gaps,
+                      coefficients, law, cyc, frame_fixed, frame_values) {}
 
   Index num_nodes() const { return P_.num_nodes(); }
   Index num_contact() const { return P_.num_contact(); }
   const ContactProblem<d>& problem() const { return P_; }
   const GalerkinHierarchy<d>& hierarchy() const { return H_; }
   CoarseCycle<d>& coarse_cycle() { return C_; }
-  const BlockMatrix<d>& fine_matrix() const { return P_.matrix(); }
+  const BlockMatrix<d>& fine_matrix() const { return P_.matrix(); }  // in storage order
+  // The fine matrix (in the frames, Dirichlet eliminated) and coarse matrix l in the user's numbering.
+  BlockMatrix<d> fine_matrix_in_user_order() const { return in_user_order(P_.matrix(), (int)order_.size() - 1); }
+  BlockMatrix<d> coarse_matrix_in_user_order(int l) const { return in_user_order(H_.matrix(l), l); }
+  // The rows smoothed on coarse level l (all by default), in the user's numbering of that level.
+  void set_rows_to_smooth(int l, std::vector<Index> rows) {
+    const Index n = H_.prolongation(l).cols;
+    for (Index i : rows)
+      if (i < 0 || i >= n) throw InputError("a row to smooth (" + std::to_string(i) + ") is outside 0.." + std::to_string(n - 1));
+    if (!order_[l].identity()) {
+      const std::vector<Index> where = order_[l].new_of_old();
+      for (Index& i : rows) i = where[i];
+    }
+    C_.set_rows_to_smooth(l, SweepOrder(std::move(rows)));
+  }
   const CycleOptions& cycle_options() const { return cyc_; }
+  bool renumbered() const { return !order_.back().identity(); }
   Monitor& monitor() { return mon_; }
   std::size_t memory_bytes() const {
-    return P_.memory_bytes() + H_.memory_bytes() + C_.memory_bytes() + sizeof(double) * 8 * P_.num_nodes() * d +
-           sizeof(Index) * fine_coloured_.rows().size() + (fine_cycle_ ? fine_cycle_->memory_bytes() : 0) +
-           (tied_ ? tied_->memory_bytes() : 0);
+    // the problem (matrix, load, masks), coarse levels and prolongations, coarse vectors, the fine
+    // iterate u, A u and the step's r, u_old (4 fine vectors and one mask), the orders
+    std::size_t s = P_.memory_bytes() + H_.memory_bytes() + C_.memory_bytes() + (sizeof(double) * 4 + 1) * P_.num_nodes() * d +
+                    fine_coloured_.memory_bytes() + lexicographic_.memory_bytes();
+    for (const Renumbering& R : order_) s += R.memory_bytes();
+    if (fine_cycle_) s += fine_cycle_->memory_bytes();
+    if (tied_) s += tied_->memory_bytes();
+    return s;
   }
   // Load paths: friction on the slip increment from the canonical displacement u_prev (nullptr: none).
-  void set_slip_origin(const double* u_prev) { P_.set_slip_origin(u_prev); }
+  void set_slip_origin(const double* u_prev) {
+    if (!u_prev || order_.back().identity()) { P_.set_slip_origin(u_prev); return; }
+    P_.set_slip_origin(order_.back().to_storage(u_prev, num_nodes(), d).data());
+  }
   bool has_slip_origin() const { return P_.has_slip_origin(); }
   Index num_fine_colours() { return fine_order(Ordering::Coloured).num_colours(); }
   // A second, bounds-free coarse correction with every contact dof frozen after each coarse
@@ -68,8 +88,10 @@ class ContactSolver {
       start(u0);
       P_.set_bounds_to_coefficients();
       SolveResult R;
-      MonotoneMultigridStep<d, Law> step(P_, H_, C_, built_, it_, cyc, fine_order(cyc.ordering), tied_.get());
-      run_loop(step, opt, mon_, R, 0);
+      {  // the step's vectors are freed before the result is written (the peak of a solve)
+        MonotoneMultigridStep<d, Law> step(P_, H_, C_, built_, it_, cyc, fine_order(cyc.ordering), tied_.get());
+        run_loop(step, stored(opt), mon_, R, 0);
+      }
       finish<Law>(R);
       return R;
     });
@@ -87,7 +109,7 @@ class ContactSolver {
       P_.set_bounds_to_coefficients();
       SolveResult R;
       TnnmgStep<d, Law> step(P_, H_, C_, built_, it_, cyc, fine_cycle(), fine_order(cyc.ordering));
-      run_loop(step, opt, mon_, R, 0);
+      run_loop(step, stored(opt), mon_, R, 0);
       finish<Law>(R);
       return R;
     });
@@ -102,17 +124,24 @@ class ContactSolver {
     TruncatedLinearCycle<d>& lin = fine_cycle();
     lin.set_linearization(built_.mask.data(), built_.hessian, cyc.lines);
     const Index n = P_.num_nodes() * d;
+    const std::vector<double> rs = order_.back().to_storage(r, num_nodes(), d);  // r: user numbering
     std::vector<double> rm(n), w(n);
-    for (Index k = 0; k < n; ++k) rm[k] = built_.mask[k] * r[k];
+    for (Index k = 0; k < n; ++k) rm[k] = built_.mask[k] * rs[k];
     PcgReport rep = pcg(
         n, [&](const double* x, double* y) { lin.multiply(x, y); },
         [&](const double* res, double* z) { lin.apply(C_, cyc, res, z); }, rm.data(), w.data(), max_iterations, reduction, true);
     energies = rep.energy;
-    return w;
+    return order_.back().to_storage_inverse(w.data(), num_nodes(), d);
   }
-  const LineSet& fine_lines(bool lines) {
+  // the lines of the fine / a coarse line smoother, node ids in the user's numbering
+  LineSet fine_lines(bool lines) {
     fine_cycle().set_linearization(built_.mask.data(), built_.hessian, lines);
-    return fine_cycle().lines();
+    return in_user_numbering(fine_cycle().lines(), (int)order_.size() - 1);
+  }
+  LineSet coarse_lines(int level) const { return in_user_numbering(H_.level(level).lines.lines(), level); }
+  LineSet in_user_numbering(LineSet L, int level) const {
+    for (Index& i : L.nodes) i = order_[level].to_user(i);
+    return L;
   }
 
   // Algorithm 1 (Coulomb only).
@@ -122,7 +151,7 @@ class ContactSolver {
     SolveResult R;
     MonotoneMultigridStep<d, law::Tresca> tresca(P_, H_, C_, built_, it_, cyc, fine_order(cyc.ordering), tied_.get());
     FixedPointStep<d> step(P_, tresca, it_);
-    run_fixed_point(step, opt, mon_, R);
+    run_fixed_point(step, stored(opt), mon_, R);
     finish<law::Coulomb>(R);
     return R;
   }
@@ -138,21 +167,84 @@ class ContactSolver {
       for (int k = 0; k < sweeps; ++k) NonlinearGaussSeidel<d, decltype(L)>::sweep(P_, it_.u.data(), k % 2 == 0, order);
       std::vector<double> u = it_.u;
       P_.basis().to_canonical(u.data());
+      order_.back().to_user_in_place(u, d);
       return u;
     });
   }
 
  private:
-  std::vector<BlockMatrix<d>> prolongations(const std::vector<Transfer>& T) const {
-    std::vector<BlockMatrix<d>> P;
-    for (std::size_t l = 0; l < T.size(); ++l) {
-      const bool fine = l + 1 == T.size();
-      if (l > 0 && T[l].n_coarse != T[l - 1].n_fine) throw InputError("prolongations do not chain: level sizes differ");
-      if (fine && T[l].n_fine != P_.num_nodes()) throw InputError("the finest prolongation does not match the matrix size");
-      if ((Index)T[l].ptr.size() != T[l].n_fine + 1) throw InputError("prolongation pointer array has the wrong length");
-      P.push_back(make_prolongation<d>(T[l].n_fine, T[l].n_coarse, T[l].ptr.data(), T[l].parent.data(), T[l].weight.data()));
-      if (fine) P_.basis().transform_prolongation(P.back());
+  // The fine data and the prolongations in storage order (the renumbering of every level).
+  struct Stored {
+    BlockMatrix<d> A;
+    std::vector<double> f, fixed_values;
+    std::vector<std::uint8_t> fixed;
+    std::vector<Index> contact_nodes;
+    std::vector<BlockMatrix<d>> P;   // canonical blocks; the fine basis transform comes later
+    std::vector<Renumbering> order;  // per level, coarsest first; the fine one last
+
+    Stored(BlockMatrix<d> A_in, const double* f_in, const std::uint8_t* fixed_in, const double* values_in,
+           const std::vector<Index>& nodes, const std::vector<Transfer>& T, bool renumber)
+        : A(std::move(A_in)) {
+      const Index n = A.rows;
+      for (std::size_t l = 0; l < T.size(); ++l) {
+        const bool fine = l + 1 == T.size();
+        if (l > 0 && T[l].n_coarse != T[l - 1].n_fine) throw InputError("prolongations do not chain: level sizes differ");
+        if (fine && T[l].n_fine != n) throw InputError("the finest prolongation does not match the matrix size");
+        if ((Index)T[l].ptr.size() != T[l].n_fine + 1) throw InputError("prolongation pointer array has the wrong length");
+        P.push_back(make_prolongation<d>(T[l].n_fine, T[l].n_coarse, T[l].ptr.data(), T[l].parent.data(), T[l].weight.data()));
+      }
+      order.resize(P.size() + 1);
+      if (renumber) {
+        order.back() = Renumbering::by_colours<d>(A);
+        order.back().permute_matrix(A);
+        if (!P.empty()) order.back().permute_rows(P.back());
+        // each coarse level (not the coarsest: it is factorized) by the colours of its Galerkin pattern
+        BlockMatrix<d> pattern;
+        for (int l = (int)P.size() - 1; l >= 1; --l) {
+          pattern = galerkin_pattern<d>(l + 1 == (int)P.size() ? A : pattern, P[l], TransposedPattern<d>(P[l]));
+          order[l] = Renumbering::by_colours<d>(pattern);
+          order[l].permute_matrix(pattern);
+          order[l].permute_columns(P[l]);
+          order[l].permute_rows(P[l - 1]);
+        }
+      }
+      const Renumbering& R = order.back();
+      f = R.to_storage(f_in, n, d);
+      fixed = R.to_storage(fixed_in, n, d);
+      fixed_values = R.to_storage(values_in, n, d);
+      contact_nodes = nodes;
+      if (!R.identity()) {
+        const std::vector<Index> where = R.new_of_old();
+        for (Index& i : contact_nodes) {
+          if (i < 0 || i >= n) throw InputError("contact node " + std::to_string(i) + " is not a mesh node");
+          i = where[i];
+        }
+      }
     }
+  };
+
+  ContactSolver(Stored S, const double* normals, const double* gaps, const double* coefficients, Law law, CycleOptions cyc,
+                const std::uint8_t* frame_fixed, const double* frame_values)
+      : law_(law),
+        P_(std::move(S.A), S.f.data(), S.fixed.data(), S.fixed_values.data(), S.contact_nodes, normals, gaps, coefficients,
+           frame_fixed, frame_values),
+        H_(transformed(std::move(S.P))),
+        C_(H_),
+        cyc_(cyc),
+        order_(std::move(S.order)) {
+    // the lexicographic order of a renumbered level is the user's order (fine: made on first use)
+    for (int l = 1; l + 1 < (int)order_.size(); ++l)
+      if (!order_[l].identity()) C_.set_rows_to_smooth(l, SweepOrder(order_[l].new_of_old()));
+    // the storage-order copies are in P_ now: freed before the first Galerkin products
+    std::vector<double>().swap(S.f);
+    std::vector<double>().swap(S.fixed_values);
+    std::vector<std::uint8_t>().swap(S.fixed);
+    built_.mask = P_.base_mask();
+    H_.rebuild(P_.matrix(), built_.mask.data());
+  }
+
+  std::vector<BlockMatrix<d>> transformed(std::vector<BlockMatrix<d>> P) const {
+    if (!P.empty()) P_.basis().transform_prolongation(P.back());
     return P;
   }
 
@@ -164,12 +256,38 @@ class ContactSolver {
 
   // The order of the fine nonlinear sweeps (the colouring made once, on first use).
   const SweepOrder& fine_order(Ordering o) {
-    if (o == Ordering::Lexicographic) return lexicographic_;
-    if (!fine_coloured_.coloured()) fine_coloured_ = SweepOrder().coloured_by<d>(P_.matrix());
+    const Renumbering& fine = order_.back();
+    if (o == Ordering::Lexicographic) {
+      if (!fine.identity() && lexicographic_.all()) lexicographic_ = SweepOrder(fine.new_of_old());
+      return lexicographic_;
+    }
+    if (!fine_coloured_.coloured())
+      fine_coloured_ = (fine.identity() ? SweepOrder() : SweepOrder(fine.new_of_old())).coloured_by<d>(P_.matrix());
     return fine_coloured_;
   }
 
+  // The options with the reference displacement (user's numbering) in storage order.
+  SolveOptions stored(const SolveOptions& opt) {
+    SolveOptions o = opt;
+    if (o.reference && !order_.back().identity()) {
+      reference_ = order_.back().to_storage(o.reference, num_nodes(), d);
+      o.reference = reference_.data();
+    }
+    return o;
+  }
+
+  BlockMatrix<d> in_user_order(const BlockMatrix<d>& A, int level) const {
+    BlockMatrix<d> B = A;
+    order_[level].inverse().permute_matrix(B);
+    return B;
+  }
+
   void start(const double* u0) {
+    std::vector<double> u_stored;
+    if (u0 && !order_.back().identity()) {
+      u_stored = order_.back().to_storage(u0, num_nodes(), d);
+      u0 = u_stored.data();
+    }
     rebuilds0_ = H_.rebuilds();
     rebuild_seconds0_ = H_.rebuild_seconds();
     mon_.start();
@@ -183,7 +301,9 @@ class ContactSolver {
     R.rebuilds = H_.rebuilds() - rebuilds0_;
     R.rebuild_seconds = H_.rebuild_seconds() - rebuild_seconds0_;
     R.phase_seconds = mon_.phase_seconds();
-    R.u = it_.u;
+    // u in the user's numbering, written once (no second copy to permute in place: the end of a
+    // solve was the peak of a level-9 run, issue 15)
+    R.u = order_.back().to_storage_inverse(it_.u.data(), num_nodes(), d);
     R.contact_force.assign(nc * d, 0.0);
     R.friction_bound.assign(nc, 0.0);
     R.state.assign(nc, 0);
@@ -195,7 +315,12 @@ class ContactSolver {
       R.state[c] = (std::int8_t)node_state<d>(p, it_.u.data() + k);
       R.friction_bound[c] = L::bound(p, R.state[c] != 0, f[k] - it_.Au[k]);
     }
-    P_.basis().to_canonical(R.u.data());
+    const BasisTransform<d>& T = P_.basis();
+    for (Index c = 0; c < T.num_blocks(); ++c) {
+      VecMap<d> ui(R.u.data() + order_.back().to_user(T.node(c)) * d);
+      ui = T.block(c) * Vec<d>(ui);
+    }
+    std::vector<double>().swap(reference_);
   }
 
   Law law_;
@@ -206,9 +331,11 @@ class ContactSolver {
   BuiltLinearization<d> built_;
   FineIterate<d> it_;
   Monitor mon_;
+  std::vector<Renumbering> order_;  // storage order of each level (coarsest first, fine last)
   SweepOrder lexicographic_, fine_coloured_;
   std::unique_ptr<TruncatedLinearCycle<d>> fine_cycle_;
   std::unique_ptr<TiedCorrection<d>> tied_;
+  std::vector<double> reference_;  // a solve's reference displacement in storage order
   int rebuilds0_ = 0;
   double rebuild_seconds0_ = 0;
 };

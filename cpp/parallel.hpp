@@ -27,6 +27,23 @@ inline int max_threads() {
 #endif
 }
 
+// The most threads a parallel loop started now may have, and the calling thread's number in it
+// (for per-thread scratch space; never for what a result depends on).
+inline int team_size() {
+#ifdef CONTACTMG_OPENMP
+  return omp_get_max_threads();
+#else
+  return 1;
+#endif
+}
+inline int thread_id() {
+#ifdef CONTACTMG_OPENMP
+  return omp_get_thread_num();
+#else
+  return 0;
+#endif
+}
+
 // The thread count of the loops below while it lives (0: all cores); the old count after.
 class ThreadScope {
  public:

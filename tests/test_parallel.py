@@ -13,18 +13,23 @@ from contactmg.hertz import hertz_problem
 from contactmg.sphere import sphere_problem
 
 
-def fresh_solve(make, **kw):
+def fresh_solve(make, storage=None, **kw):
     # a fresh problem per solve: a solver carries its coarse hierarchy (incrementally updated)
-    # from one solve to the next, so only fresh solvers are comparable bit for bit
-    return make().solve("nmg", **kw)
+    # from one solve to the next, so only fresh solvers are comparable bit for bit. storage: the
+    # ordering the core solver is built for (coloured: its levels stored by colours)
+    p = make()
+    if storage is not None:
+        p.default_ordering = storage
+    return p.solve("nmg", **kw)
 
 
-@pytest.mark.parametrize("ordering", ["coloured", "lexicographic"])
-def test_two_threads_give_the_one_thread_result_bit_for_bit_2d(ordering):
-    # level 6: 18,721 nodes, above the sizes where loops and colours go parallel
+@pytest.mark.parametrize("ordering, storage", [("coloured", "coloured"), ("coloured", "lexicographic"),
+                                               ("lexicographic", "lexicographic")])
+def test_two_threads_give_the_one_thread_result_bit_for_bit_2d(ordering, storage):
+    # level 6: 18,721 nodes, above the sizes where loops, colours and the restriction go parallel
     make = lambda: hertz_problem("triangle", 6, 0.4)
-    r1 = fresh_solve(make, threads=1, ordering=ordering)
-    r2 = fresh_solve(make, threads=2, ordering=ordering)
+    r1 = fresh_solve(make, storage, threads=1, ordering=ordering)
+    r2 = fresh_solve(make, storage, threads=2, ordering=ordering)
     assert r1.converged and r2.converged
     assert r1.cycles == r2.cycles
     assert np.array_equal(r1.displacement, r2.displacement)
@@ -65,6 +70,69 @@ def test_coloured_sweeps_lower_the_energy_and_keep_the_solution():
     z = np.zeros_like(res.displacement)
     assert np.array_equal(S.smooth(z, 3, ordering="coloured", threads=1), S.smooth(z, 3, ordering="coloured", threads=2))
     assert S.num_colours >= 3  # a triangle mesh couples the three nodes of a cell
+
+
+def _pair(make):
+    """The same problem with a solver in the user's order and one stored by colours."""
+    user, by_colours = make(), make()
+    user.default_ordering, by_colours.default_ordering = "lexicographic", "coloured"
+    assert not user.solver.renumbered and by_colours.solver.renumbered
+    return user, by_colours
+
+
+@pytest.mark.parametrize("make", [lambda: hertz_problem("triangle", 5, 0.4), lambda: sphere_problem(levels=2, friction=0.4)],
+                         ids=["hertz-2d", "sphere-3d"])
+def test_storage_by_colours_is_the_coloured_method_in_the_users_numbering(make):
+    # Renumbering by colours keeps every colour of the greedy colouring (greedy in colour-major
+    # order gives each row its colour again), so the sweeps are the same; only the order of the
+    # sums within a row changes: the same cycles, the solution to round-off, in the user's numbering.
+    user, by_colours = _pair(make)
+    a = user.solve("nmg", ordering="coloured")
+    b = by_colours.solve("nmg", ordering="coloured")
+    assert a.converged and b.converged and a.cycles == b.cycles
+    scale = np.abs(a.displacement).max()
+    assert np.abs(a.displacement - b.displacement).max() <= 1e-12 * scale
+    assert np.array_equal(a.node_state, b.node_state)
+    np.testing.assert_allclose(a.history["correction_norm"][:8], b.history["correction_norm"][:8], rtol=1e-8)
+    np.testing.assert_allclose(b.contact_force, a.contact_force, atol=1e-9 * np.abs(a.contact_force).max())
+    # the matrices handed out are in the user's numbering: the same pattern, the same values
+    Su, Sc = user.solver, by_colours.solver
+    for get in [lambda S: S.fine_matrix()] + [lambda S, l=l: S.coarse_matrix(l) for l in range(Su.num_levels - 1)]:
+        Mu, Mc = get(Su), get(Sc)
+        assert np.array_equal(Mu.indptr, Mc.indptr) and np.array_equal(Mu.indices, Mc.indices)
+        assert np.abs(Mu.data - Mc.data).max() <= 1e-13 * np.abs(Mu.data).max()
+    # the lexicographic order on a solver stored by colours still visits the user's order
+    c = by_colours.solve("nmg", ordering="lexicographic")
+    d = user.solve("nmg", ordering="lexicographic")
+    assert c.cycles == d.cycles and np.abs(c.displacement - d.displacement).max() <= 1e-12 * scale
+
+
+def test_inputs_in_the_users_numbering_on_a_solver_stored_by_colours():
+    # u0, the error reference, the sweep check and the rows to smooth of a coarse level: all in the
+    # user's numbering, whatever the storage. Frictionless: the Anderson mixing of settled Coulomb
+    # cycles (steps/settled_anderson.hpp) magnifies the round-off of the two storage orders in the
+    # intermediate iterates (same cycles and solution to 1e-14, error histories within a few per cent)
+    user, by_colours = _pair(lambda: hertz_problem("triangle", 5, 0.0))
+    ref = user.solve("nmg", ordering="coloured")
+    rng = np.random.default_rng(1)
+    u0 = ref.displacement * (1 + 0.01 * rng.standard_normal(ref.displacement.shape))
+    a = user.solve("nmg", ordering="coloured", u0=u0, error_reference=ref.displacement)
+    b = by_colours.solve("nmg", ordering="coloured", u0=u0, error_reference=ref.displacement)
+    assert a.cycles == b.cycles and a.cycles < ref.cycles
+    np.testing.assert_allclose(b.history["error"][:4], a.history["error"][:4], rtol=1e-6)
+    for S in (user.solver, by_colours.solver):
+        assert np.abs(S.smooth(ref.displacement, 2, ordering="coloured") - ref.displacement).max() <= 1e-9 * np.abs(ref.displacement).max()
+    top = user.solver.num_levels - 2
+    n_top = user.solver.coarse_matrix(top).shape[0] // 2
+    rows = np.arange(0, n_top, 2, dtype=np.int64)
+    for S in (user.solver, by_colours.solver):
+        S.set_rows_to_smooth(top, rows)
+    a = user.solve("nmg", ordering="coloured")
+    b = by_colours.solve("nmg", ordering="coloured")
+    assert a.converged and b.converged and a.cycles == b.cycles
+    assert np.abs(a.displacement - b.displacement).max() <= 1e-11 * np.abs(a.displacement).max()
+    with pytest.raises(ValueError, match="outside"):
+        by_colours.solver.set_rows_to_smooth(top, np.array([n_top], np.int64))
 
 
 def test_the_core_takes_the_matrix_over_and_A_is_assembled_again_on_demand():

@@ -11,29 +11,51 @@ namespace cmg {
 // A fine dof v = sum_k w_k c_k with sum |w_k| <= sigma holds if each w_k c_k stays within
 // [lo, hi] / max(1, sigma); a coarse dof takes the tightest of these over all fine dofs it touches.
 // Coarse dofs that touch no bounded fine dof keep (-inf, inf).
+// The bounds of fine row i (components with mask 0 or no finite bound skipped) into lo_c, hi_c.
+template <int d>
+inline void restrict_row_bounds(const BlockMatrix<d>& P, const std::uint8_t* mask, Index i, const double* lo_i, const double* hi_i,
+                                double* lo_c, double* hi_c) {
+  for (int c = 0; c < d; ++c) {
+    if ((mask && !mask[i * d + c]) || (lo_i[c] == -kInf && hi_i[c] == kInf)) continue;
+    double sigma = 0;
+    for (Index k = P.indptr[i]; k < P.indptr[i + 1]; ++k)
+      for (int a = 0; a < d; ++a) sigma += std::abs(P.block(k)(c, a));
+    const double scale = 1.0 / std::max(1.0, sigma);
+    const double lo = lo_i[c] * scale, hi = hi_i[c] * scale;
+    for (Index k = P.indptr[i]; k < P.indptr[i + 1]; ++k)
+      for (int a = 0; a < d; ++a) {
+        const double w = P.block(k)(c, a);
+        if (w == 0) continue;
+        const Index g = P.indices[k] * d + a;
+        if (w > 0) { hi_c[g] = std::min(hi_c[g], hi); lo_c[g] = std::max(lo_c[g], lo); }
+        else { hi_c[g] = std::min(hi_c[g], -lo); lo_c[g] = std::max(lo_c[g], -hi); }
+      }
+  }
+}
+
 template <int d>
 void restrict_bounds(const BlockMatrix<d>& P, const std::uint8_t* mask, const double* lo_f, const double* hi_f, double* lo_c,
                      double* hi_c) {
   std::fill(lo_c, lo_c + d * P.cols, -kInf);
   std::fill(hi_c, hi_c + d * P.cols, kInf);
-  for (Index i = 0; i < P.rows; ++i)
-    for (int c = 0; c < d; ++c) {
-      const Index f = i * d + c;
-      if ((mask && !mask[f]) || (lo_f[f] == -kInf && hi_f[f] == kInf)) continue;
-      double sigma = 0;
-      for (Index k = P.indptr[i]; k < P.indptr[i + 1]; ++k)
-        for (int a = 0; a < d; ++a) sigma += std::abs(P.block(k)(c, a));
-      const double scale = 1.0 / std::max(1.0, sigma);
-      const double lo = lo_f[f] * scale, hi = hi_f[f] * scale;
-      for (Index k = P.indptr[i]; k < P.indptr[i + 1]; ++k)
-        for (int a = 0; a < d; ++a) {
-          const double w = P.block(k)(c, a);
-          if (w == 0) continue;
-          const Index g = P.indices[k] * d + a;
-          if (w > 0) { hi_c[g] = std::min(hi_c[g], hi); lo_c[g] = std::max(lo_c[g], lo); }
-          else { hi_c[g] = std::min(hi_c[g], -lo); lo_c[g] = std::max(lo_c[g], -hi); }
-        }
-    }
+  for (Index i = 0; i < P.rows; ++i) restrict_row_bounds<d>(P, mask, i, lo_f + i * d, hi_f + i * d, lo_c, hi_c);
+}
+
+// Fine correction bounds that can be finite only at some nodes (the contact nodes): lo, hi hold
+// d entries for each of `nodes` (the fine vectors of bounds were 16 bytes per dof, issue 15).
+struct NodeBounds {
+  const std::vector<Index>* nodes = nullptr;  // nullptr: no bounds
+  const double* lo = nullptr;
+  const double* hi = nullptr;
+};
+
+template <int d>
+void restrict_bounds(const BlockMatrix<d>& P, const std::uint8_t* mask, const NodeBounds& b, double* lo_c, double* hi_c) {
+  std::fill(lo_c, lo_c + d * P.cols, -kInf);
+  std::fill(hi_c, hi_c + d * P.cols, kInf);
+  if (!b.nodes) return;
+  const Index m = (Index)b.nodes->size();
+  for (Index c = 0; c < m; ++c) restrict_row_bounds<d>(P, mask, (*b.nodes)[c], b.lo + c * d, b.hi + c * d, lo_c, hi_c);
 }
 
 }  // namespace cmg

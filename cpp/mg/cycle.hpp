@@ -97,27 +97,28 @@ class CoarseCycle {
     return s;
   }
 
-  // w = P~ c (w: fine level, n_fine * d, overwritten), c the multilevel correction for the fine
-  // residual r, the truncation mask and the fine correction bounds [lo, hi] (ignored when !bounded).
+  // w = P~ c (w: fine level, n_fine * d; add: w += P~ c), c the multilevel correction for the fine
+  // residual r, the truncation mask and the fine correction bounds (ignored when !bounded).
   // lines: line Gauss-Seidel on the unbounded levels that have lines (a linear cycle; the monotone
   // cycle keeps its point sweeps).
-  void correction(const CycleOptions& opt, const double* r_fine, const std::uint8_t* mask, const double* lo_f,
-                  const double* hi_f, bool bounded, double* w, Index n_fine, bool lines = false) {
+  void correction(const CycleOptions& opt, const double* r_fine, const std::uint8_t* mask, const NodeBounds& bounds,
+                  bool bounded, double* w, Index n_fine, bool add = false, bool lines = false) {
     const int top = (int)lv_.size() - 1;
     if (top < 0) {  // a single level: the smoother alone
-      std::fill(w, w + n_fine * d, 0.0);
+      if (!add) std::fill(w, w + n_fine * d, 0.0);
       return;
     }
     const BlockMatrix<d>& P = H_.prolongation(top);
     Vectors& C = lv_[top];
-    restrict_residual<d>(P, mask, r_fine, C.b.data());
-    if (bounded) restrict_bounds<d>(P, mask, lo_f, hi_f, C.lo.data(), C.hi.data());
+    restrict_residual<d>(P, mask, r_fine, C.b.data(), C.r.data());  // C.r: scratch until level top smooths
+    if (bounded) restrict_bounds<d>(P, mask, bounds, C.lo.data(), C.hi.data());
     set_bounded(C, bounded);
     std::fill(C.x.begin(), C.x.end(), 0.0);
     cur_ = &orders(opt.ordering);
     lines_ = lines;
     cycle(opt, top, opt.cycle);
-    prolongate<d>(P, mask, C.x.data(), w);
+    if (add) prolongate_add<d>(P, mask, C.x.data(), w);
+    else prolongate<d>(P, mask, C.x.data(), w);
   }
 
  private:
@@ -162,7 +163,7 @@ class CoarseCycle {
     for (int v = 0; v < visits; ++v) {
       A.multiply(L.x.data(), L.r.data());
       parallel_for((Index)L.r.size(), [&](Index k) { L.r[k] = L.b[k] - L.r[k]; });
-      restrict_residual<d>(P, nullptr, L.r.data(), C.b.data());
+      restrict_residual<d>(P, nullptr, L.r.data(), C.b.data(), C.r.data());
       if (L.any_bounds) {
         // the coarser level gets the slack that remains on this one
         std::vector<double>& slo = scratch_lo_, &shi = scratch_hi_;

@@ -55,7 +55,8 @@ class GalerkinHierarchy {
   double rebuild_seconds() const { return rebuild_seconds_; }
   std::size_t memory_bytes() const {
     std::size_t s = 0;
-    for (auto& L : lv_) s += L.A.memory_bytes() + sizeof(double) * L.Dinv.size() + L.lines.memory_bytes() + L.active.size();
+    for (auto& L : lv_) s += L.A.memory_bytes() + sizeof(double) * L.Dinv.size() + L.lines.memory_bytes() + L.inert.size();
+    for (auto& v : slot_) s += sizeof(std::int32_t) * v.size();
     for (auto& P : P_) s += P.memory_bytes();
     return s;
   }
@@ -140,9 +141,9 @@ class GalerkinHierarchy {
 
   void add_delta(int l, Index I, Index J, const Mat<d>& M) {
     const Index pos = lv_[l].A.find(I, J);
-    Index& s = slot_[l][pos];
+    std::int32_t& s = slot_[l][pos];
     if (s < 0) {
-      s = (Index)delta_[l].size();
+      s = (std::int32_t)delta_[l].size();
       delta_[l].push_back({pos, I, J, M});
     } else {
       delta_[l][s].M += M;
@@ -228,7 +229,7 @@ class GalerkinHierarchy {
   std::vector<Level> lv_;
   std::vector<GalerkinProduct<d>> gp_;
   std::vector<std::vector<DeltaEntry>> delta_;  // pending incremental change of each level's A
-  std::vector<std::vector<Index>> slot_;        // position in A -> entry of delta_, or -1
+  std::vector<std::vector<std::int32_t>> slot_;  // position in A -> entry of delta_, or -1 (32 bits: 4 bytes a coarse block)
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt_;
   int rebuilds_ = 0, incremental_ = 0;
   bool lines_found_ = false;

@@ -41,21 +41,24 @@ Mat<d> block_inverse(const Mat<d>& D) {
 // one emptied by incremental coarse updates: it is inert, inverted as identity, and with its
 // (zero) right-hand side it stays zero.
 template <int d>
+Mat<d> diagonal_block_inverse(const BlockMatrix<d>& A, Index i, double thr, std::uint8_t* inert) {
+  Mat<d> D = Mat<d>::Zero();
+  if (A.diag[i] >= 0) D = A.block(A.diag[i]);
+  for (int c = 0; c < d; ++c) {
+    inert[c] = D(c, c) <= thr;
+    if (inert[c]) { D.row(c).setZero(); D.col(c).setZero(); D(c, c) = 1; }
+  }
+  return block_inverse<d>(D);
+}
+
+template <int d>
 void invert_diagonal(const BlockMatrix<d>& A, std::vector<double>& Dinv, std::vector<std::uint8_t>& inert, double scale,
                      Index first = 0, Index last = -1) {
   if (last < 0) last = A.rows;
   Dinv.resize(A.rows * d * d);
   inert.resize(A.rows * d);
   const double thr = 1e-12 * scale;
-  for (Index i = first; i < last; ++i) {
-    Mat<d> D = Mat<d>::Zero();
-    if (A.diag[i] >= 0) D = A.block(A.diag[i]);
-    for (int c = 0; c < d; ++c) {
-      inert[i * d + c] = D(c, c) <= thr;
-      if (inert[i * d + c]) { D.row(c).setZero(); D.col(c).setZero(); D(c, c) = 1; }
-    }
-    MatMap<d>(Dinv.data() + i * d * d) = block_inverse<d>(D);
-  }
+  for (Index i = first; i < last; ++i) MatMap<d>(Dinv.data() + i * d * d) = diagonal_block_inverse<d>(A, i, thr, inert.data() + i * d);
 }
 
 // b_i - sum_{k != i} A_ik x_k

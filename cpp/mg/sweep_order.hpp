@@ -25,7 +25,10 @@ class SweepOrder {
 
   bool all() const { return all_; }
   bool coloured() const { return !colour_ptr_.empty(); }
-  const std::vector<Index>& rows() const { return rows_; }
+  const std::vector<Index>& rows() const { return rows_; }  // empty when all or contiguous
+  // Every colour a contiguous range of rows (a level stored by colours).
+  bool contiguous() const { return contiguous_; }
+  std::size_t memory_bytes() const { return sizeof(Index) * (rows_.size() + colour_ptr_.size()); }
   Index num_colours() const { return coloured() ? (Index)colour_ptr_.size() - 1 : 0; }
 
   // The same rows by colours of the block graph of A: greedy, visiting the rows in their order
@@ -60,6 +63,11 @@ class SweepOrder {
     std::vector<Index> sorted = rows;
     std::sort(sorted.begin(), sorted.end());
     for (Index i : sorted) S.rows_[fill[colour[i]]++] = i;
+    // Stored by colours (renumbering.hpp), every colour is the range colour_ptr_[c] .. [c + 1):
+    // the list of rows is then the identity and is dropped.
+    S.contiguous_ = true;
+    for (std::size_t k = 0; k < S.rows_.size() && S.contiguous_; ++k) S.contiguous_ = S.rows_[k] == (Index)k;
+    if (S.contiguous_) std::vector<Index>().swap(S.rows_);
     return S;
   }
 
@@ -72,6 +80,10 @@ class SweepOrder {
       for (Index cc = 0; cc < nc; ++cc) {
         const Index c = forward ? cc : nc - 1 - cc;
         const Index b = colour_ptr_[c], m = colour_ptr_[c + 1] - b;
+        if (contiguous_) {
+          parallel_for(m, [&](Index q) { f(b + q); }, 1024);
+          continue;
+        }
         const Index* r = rows_.data() + b;
         parallel_for(m, [&](Index q) { f(r[q]); }, 1024);
       }
@@ -94,6 +106,7 @@ class SweepOrder {
   std::vector<Index> rows_;
   std::vector<Index> colour_ptr_;  // coloured: rows_[colour_ptr_[c] .. colour_ptr_[c+1]) have colour c
   bool all_ = true;
+  bool contiguous_ = false;
 };
 
 }  // namespace cmg

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include "block_matrix.hpp"
+#include "parallel.hpp"
 
 namespace cmg {
 
@@ -78,16 +79,34 @@ void prolongate(const BlockMatrix<d>& P, const std::uint8_t* mask, const double*
   });
 }
 
-// y_coarse = P^T diag(mask) r_fine
+// y_coarse += P^T diag(mask) r_fine over the fine rows [first, last), in row order
 template <int d>
-void restrict_residual(const BlockMatrix<d>& P, const std::uint8_t* mask, const double* rf, double* yc) {
-  std::fill(yc, yc + d * P.cols, 0.0);
-  for (Index i = 0; i < P.rows; ++i) {
+inline void restrict_rows(const BlockMatrix<d>& P, const std::uint8_t* mask, const double* rf, double* yc, Index first, Index last) {
+  for (Index i = first; i < last; ++i) {
     Vec<d> r = CVecMap<d>(rf + d * i);
     if (mask)
       for (int c = 0; c < d; ++c) r[c] *= mask[i * d + c];
     for (Index k = P.indptr[i]; k < P.indptr[i + 1]; ++k) VecMap<d>(yc + d * P.indices[k]).noalias() += P.block(k).transpose() * r;
   }
+}
+
+// y_coarse = P^T diag(mask) r_fine. A scatter: the fine rows are split into two fixed halves, the
+// first summed into y, the second into `scratch` (coarse size), then y += scratch -- on two
+// threads at once, and the same sums in the same order on any thread count (bit for bit).
+template <int d>
+void restrict_residual(const BlockMatrix<d>& P, const std::uint8_t* mask, const double* rf, double* yc, double* scratch) {
+  const Index nc = d * P.cols, half = P.rows / 2;
+  if (P.rows < kParallelGrain) {
+    std::fill(yc, yc + nc, 0.0);
+    restrict_rows<d>(P, mask, rf, yc, 0, P.rows);
+    return;
+  }
+  parallel_for(2, [&](Index h) {
+    double* y = h == 0 ? yc : scratch;
+    std::fill(y, y + nc, 0.0);
+    restrict_rows<d>(P, mask, rf, y, h == 0 ? 0 : half, h == 0 ? half : P.rows);
+  }, 1);
+  parallel_for(nc, [&](Index k) { yc[k] += scratch[k]; });
 }
 
 }  // namespace cmg

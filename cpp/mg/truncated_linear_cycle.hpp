@@ -68,7 +68,7 @@ class TruncatedLinearCycle {
     for (int s = 0; s < opt.nu1; ++s) gs_.sweep(A_, mask_.data(), r, w, true);
     multiply(w, t_.data());
     parallel_for(n, [&](Index k) { r_[k] = r[k] - t_[k]; });
-    C.correction(opt, r_.data(), mask_.data(), nullptr, nullptr, false, t_.data(), A_.rows, use_lines_);
+    C.correction(opt, r_.data(), mask_.data(), NodeBounds{}, false, t_.data(), A_.rows, false, use_lines_);
     parallel_for(n, [&](Index k) { w[k] += t_[k]; });
     for (int s = 0; s < opt.nu2; ++s) gs_.sweep(A_, mask_.data(), r, w, false);
   }

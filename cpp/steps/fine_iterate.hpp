@@ -19,10 +19,9 @@ struct FineIterate {
     } else {
       u.assign(n * d, 0.0);
     }
-    const auto& fixed = P.fixed();
-    const auto& values = P.fixed_values();
-    for (Index k = 0; k < n * d; ++k)
-      if (fixed[k]) u[k] = values[k];
+    const auto& dofs = P.fixed_dofs();
+    const auto& values = P.fixed_dof_values();
+    for (std::size_t m = 0; m < dofs.size(); ++m) u[dofs[m]] = values[m];
     Au.assign(n * d, 0.0);
     P.matrix().multiply(u.data(), Au.data());
   }

@@ -40,8 +40,8 @@ class MonotoneMultigridStep {
       : P_(P), H_(H), C_(C), built_(built), it_(it), opt_(opt), order_(fine_order), tied_(tied) {
     const Index n = P.num_nodes() * d;
     mask_ = P.base_mask();
-    r_.assign(n, 0.0); w_.assign(n, 0.0); old_.assign(n, 0.0);
-    lo_.assign(n, -kInf); hi_.assign(n, kInf);
+    r_.assign(n, 0.0); old_.assign(n, 0.0);
+    lo_.assign(P.num_contact() * d, -kInf); hi_.assign(P.num_contact() * d, kInf);  // bounds live at contact nodes only
   }
 
   double iterate(double* phases, bool& rebuilt) {
@@ -52,8 +52,7 @@ class MonotoneMultigridStep {
     old_ = u;
     for (int s = 0; s < opt_.nu1; ++s) Smoother::sweep(P_, u.data(), true, order_);
     pc.lap(Phase::PreSmooth);
-    A.multiply(u.data(), r_.data());
-    parallel_for((Index)r_.size(), [&](Index k) { r_[k] = f[k] - r_[k]; });
+    A.residual(u.data(), f.data(), r_.data());
     const bool bounded = linearize();
     pc.lap(Phase::Linearize);
     const bool state_changed = mask_ != built_.mask;
@@ -64,8 +63,9 @@ class MonotoneMultigridStep {
       built_.hessian = hessian_;
     }
     pc.lap(Phase::CoarseUpdate);
-    C_.correction(opt_, r_.data(), mask_.data(), lo_.data(), hi_.data(), bounded, w_.data(), P_.num_nodes());
-    parallel_for((Index)u.size(), [&](Index k) { u[k] += w_[k]; });
+    // u += P~ c: prolongated straight into the iterate (no fine vector for the correction)
+    C_.correction(opt_, r_.data(), mask_.data(), NodeBounds{&P_.contact_nodes(), lo_.data(), hi_.data()}, bounded, u.data(),
+                  P_.num_nodes(), true);
     if (tied_) tied_->apply(P_, opt_, u.data());  // two bodies: the common motions, no bounds
     pc.lap(Phase::CoarseCorrection);
     for (int s = 0; s < opt_.nu2; ++s) Smoother::sweep(P_, u.data(), false, order_);
@@ -78,10 +78,17 @@ class MonotoneMultigridStep {
       if (state_changed || !any_sliding()) anderson_.reset();
       else anderson_.step(old_, u, [&](std::vector<double>& y) { return admit_mixed(y); });
     }
-    parallel_for((Index)u.size(), [&](Index k) { old_[k] = u[k] - old_[k]; });
-    A.multiply(old_.data(), tmp_.data());
-    parallel_for((Index)u.size(), [&](Index k) { it_.Au[k] += tmp_[k]; });
-    const double e = parallel_sum((Index)u.size(), [&](Index k) { return old_[k] * tmp_[k]; });
+    // Au += A (u - u_old) and e = |u - u_old|_A^2 in one pass (were four: difference, product,
+    // update, dot); sums over fixed chunks of rows, so the same on any thread count
+    const double e = parallel_sum(A.rows, [&](Index i) {
+      Vec<d> y = Vec<d>::Zero();
+      for (Index k = A.indptr[i]; k < A.indptr[i + 1]; ++k) {
+        const Index j = A.indices[k];
+        y.noalias() += A.block(k) * (CVecMap<d>(u.data() + d * j) - CVecMap<d>(old_.data() + d * j));
+      }
+      VecMap<d>(it_.Au.data() + d * i) += y;
+      return (CVecMap<d>(u.data() + d * i) - CVecMap<d>(old_.data() + d * i)).dot(y);
+    });
     pc.lap(Phase::Norm);
     return std::sqrt(std::max(e, 0.0));
   }
@@ -106,12 +113,12 @@ class MonotoneMultigridStep {
   double error_against(const double* ref) {
     const std::vector<double>& u = it_.u;
     const auto& fixed = P_.fixed();
-    w_.assign(ref, ref + u.size());
-    P_.basis().to_local(w_.data());
-    for (std::size_t k = 0; k < u.size(); ++k) old_[k] = fixed[k] ? 0.0 : u[k] - w_[k];
-    P_.matrix().multiply(old_.data(), tmp_.data());
+    std::vector<double> w(ref, ref + u.size()), tmp(u.size());  // diagnostics: scratch of its own
+    P_.basis().to_local(w.data());
+    for (std::size_t k = 0; k < u.size(); ++k) w[k] = fixed[k] ? 0.0 : u[k] - w[k];
+    P_.matrix().multiply(w.data(), tmp.data());
     double e = 0;
-    for (std::size_t k = 0; k < u.size(); ++k) e += old_[k] * tmp_[k];
+    for (std::size_t k = 0; k < u.size(); ++k) e += w[k] * tmp[k];
     return std::sqrt(std::max(e, 0.0));
   }
 
@@ -123,9 +130,10 @@ class MonotoneMultigridStep {
     Smoother::sweep(P_, u.data(), true, order_);
     for (std::size_t k = 0; k < u.size(); ++k) std::swap(u[k], old_[k]);
     for (std::size_t k = 0; k < u.size(); ++k) old_[k] -= u[k];
-    P_.matrix().multiply(old_.data(), tmp_.data());
+    std::vector<double>& tmp = r_;  // the residual is not needed after a cycle: no new fine vector
+    P_.matrix().multiply(old_.data(), tmp.data());
     double e = 0;
-    for (std::size_t k = 0; k < u.size(); ++k) e += old_[k] * tmp_[k];
+    for (std::size_t k = 0; k < u.size(); ++k) e += old_[k] * tmp[k];
     return std::sqrt(std::max(e, 0.0));
   }
 
@@ -139,8 +147,8 @@ class MonotoneMultigridStep {
     for (Index c = 0; c < P_.num_contact(); ++c) {
       const Index i = P_.contact_node(c), k = i * d;
       Mat<d> Hc = Mat<d>::Zero();
-      if (linearize_node<L, d>(P_.node(c), it_.u.data() + k, r_.data() + k, mask_.data() + k, base.data() + k, lo_.data() + k,
-                               hi_.data() + k, &Hc))
+      if (linearize_node<L, d>(P_.node(c), it_.u.data() + k, r_.data() + k, mask_.data() + k, base.data() + k, lo_.data() + c * d,
+                               hi_.data() + c * d, &Hc))
         bounded = true;
       if (!Hc.isZero(0.0)) hessian_.emplace_back(i, Hc);
     }
@@ -188,10 +196,8 @@ class MonotoneMultigridStep {
   const SweepOrder& order_;  // of the fine nonlinear sweeps
   TiedCorrection<d>* tied_;   // or nullptr
   std::vector<std::uint8_t> mask_;
-  // tmp_ shares w_'s storage: the coarse correction w is added to u before A (u - u_old) needs
-  // the buffer (one fine vector less, issue 15)
-  std::vector<double> r_, w_, old_, lo_, hi_;
-  std::vector<double>& tmp_ = w_;
+  // three fine vectors: the iterate's own (u, A u) aside, a cycle needs only r and u_old (issue 15)
+  std::vector<double> r_, old_, lo_, hi_;  // lo_, hi_: nc * d
   std::vector<std::pair<Index, Mat<d>>> hessian_;
   SettledAnderson anderson_;
 };

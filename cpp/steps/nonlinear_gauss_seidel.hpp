@@ -12,13 +12,12 @@ struct NonlinearGaussSeidel {
   static void sweep(const ContactProblem<d>& P, double* u, bool forward, const SweepOrder& order = SweepOrder()) {
     const BlockMatrix<d>& A = P.matrix();
     const double* f = P.load().data();
-    const double* Dinv = P.Dinv().data();
     order.visit(A.rows, forward, [&](Index i) {
       const Vec<d> b = local_rhs<d>(A, u, f, i);
       VecMap<d> ui(u + d * i);
       const Index c = L::has_contact ? P.contact_of_node(i) : -1;
       if (c < 0) {
-        ui = CMatMap<d>(Dinv + i * d * d) * b;
+        ui = P.diagonal_inverse(i) * b;
         return;
       }
       const Mat<d> B = A.block(A.diag[i]);

@@ -30,7 +30,7 @@ class TiedCorrection {
     const std::vector<double>& f = P.load();
     P.matrix().multiply(u, r_.data());
     parallel_for((Index)r_.size(), [&](Index k) { r_[k] = f[k] - r_[k]; });
-    C_.correction(opt, r_.data(), mask_.data(), nullptr, nullptr, false, w_.data(), P.num_nodes());
+    C_.correction(opt, r_.data(), mask_.data(), NodeBounds{}, false, w_.data(), P.num_nodes());
     parallel_for((Index)r_.size(), [&](Index k) { u[k] += w_[k]; });
   }
 

@@ -120,7 +120,7 @@ class TnnmgStep {
   void linear_correction() {
     const Index n = (Index)w_.size();
     if (opt_.linear == LinearCorrection::Coarse) {
-      C_.correction(opt_, r_.data(), mask_.data(), lo_.data(), hi_.data(), false, w_.data(), P_.num_nodes(), opt_.lines);
+      C_.correction(opt_, r_.data(), mask_.data(), NodeBounds{}, false, w_.data(), P_.num_nodes(), false, opt_.lines);
       linear_iterations_ = 1;
       return;
     }

@@ -96,8 +96,15 @@ def add_path_arguments(p) -> None:
 def add_thread_options(p) -> None:
     p.add_argument("--threads", type=_positive_int("--threads", 0, 4096), default=0,
                    help="threads of the sweeps and products (default 0: all cores; the result does not depend on it)")
-    p.add_argument("--ordering", choices=["lexicographic", "coloured"], default="lexicographic",
-                   help="Gauss-Seidel order: colours of the block graph (parallel) or lexicographic")
+    p.add_argument("--ordering", choices=["lexicographic", "coloured"], default=None,
+                   help="Gauss-Seidel order: colours of the block graph (parallel; the levels stored by colours) "
+                        "or lexicographic (default: the problem's, coloured)")
+
+
+def use_ordering(problem, args) -> None:
+    """The problem's solver is built for --ordering (a coloured one stores its levels by colours)."""
+    if args.ordering is not None:
+        problem.default_ordering = args.ordering
 
 
 def write_boundary_stress_plot(result, friction: float, path: str) -> None:
@@ -223,6 +230,7 @@ def run_hertz(args) -> int:
         raise ValueError("--linear chooses the linear correction of --method tnnmg")
     problem = hertz_problem(args.cell, args.levels, args.friction, coulomb_at_zero=args.method == "fixed-point",
                             cycle=args.cycle, nu1=args.nu1, nu2=args.nu2, hierarchy=args.hierarchy)
+    use_ordering(problem, args)
     if cli_path.wanted(args):
         from .generators import HERTZ_TOP
         from .hertz import TOP_DISPLACEMENT

@@ -35,6 +35,11 @@ CORE_TAKES_MATRIX = "take_matrix" in (_core.ContactSolver2D.__init__.__doc__ or 
 # Issue 14: the linear correction of tnnmg per solve (PCG / one cycle / coarse levels only; line smoothing)
 SOLVE_TAKES_LINEAR = "linear (tnnmg)" in (_core.ContactSolver2D.solve.__doc__ or "")
 LINEAR_CORRECTIONS = ("pcg", "cycle", "coarse")
+# Issue 15: a core solver built for the coloured order stores its levels by colours (each colour a
+# contiguous range: the coloured sweep streams memory). The default ordering of a problem's solves,
+# chosen by measurement (docs/scaling.md, benchmarks/parallel_bandwidth.py).
+CORE_RENUMBERS = hasattr(_core.ContactSolver2D, "renumbered")
+DEFAULT_ORDERING = "coloured" if CORE_RENUMBERS else "lexicographic"
 
 
 def tag_tuple(tags, name: str) -> tuple:
@@ -161,6 +166,9 @@ class CycleOptions:
 
 
 class ContactProblem:
+    # the ordering of solves that name none; the kept core solver is stored for it (set before the
+    # first solve to change it: another ordering per solve runs on that solver, slower, same result)
+    default_ordering: str = DEFAULT_ORDERING
     """Linear elasticity on the finest level of `hierarchy` with contact on the facets tagged
     `contact_tags` against `obstacle` under `friction`. Without contact tags it is a linear
     elasticity problem solved by linear multigrid.
@@ -334,11 +342,14 @@ class ContactProblem:
         args = (self.load if load is None else load, self.fixed, values, c.nodes, c.normals,
                 c.gaps, self.coefficients, law, [t.as_tuple() for t in self.hierarchy.transfers], options.cycle,
                 options.nu1, options.nu2)
+        kw = dict(frame_fixed=frame_fixed, frame_values=frame_values)
+        if CORE_RENUMBERS:
+            kw["ordering"] = self.default_ordering
         if not (CORE_TAKES_MATRIX and take_matrix):
-            return cls(self.A, *args, frame_fixed=frame_fixed, frame_values=frame_values)
+            return cls(self.A, *args, **kw)
         # The core takes the assembled matrix over (left empty here): one fine matrix in memory.
         A, self._A = self.A, None
-        return cls(A, *args, frame_fixed=frame_fixed, frame_values=frame_values, take_matrix=True)
+        return cls(A, *args, take_matrix=True, **kw)
 
     # Local smoothing (issue 11): None = on for adaptive hierarchies, off for uniform ones (there every
     # node of a level changes); True/False force it. Set before the first solve.
@@ -413,9 +424,9 @@ class ContactProblem:
         reports cycles (SOLVE_TAKES_CYCLE_OPTIONS); an exception it raises stops the solve. With an
         older core, which runs all cycles in one call, asking for it is an error. `threads`: the
         threads of the sweeps, products and norms (0: all cores); the result is the same bit for
-        bit on any count. `ordering` of every Gauss-Seidel sweep: "coloured" (the default: colours
-        of the block graph, the rows of one colour at once) or "lexicographic" (one thread for the
-        sweeps). `fixed_point_stall_window` (Algorithm 1): stop as not converging once the relative
+        bit on any count. `ordering` of every Gauss-Seidel sweep: "coloured" (colours of the block
+        graph, the rows of one colour at once; the levels stored by colours) or "lexicographic" (one
+        thread for the sweeps); None: `default_ordering` (DEFAULT_ORDERING). `fixed_point_stall_window` (Algorithm 1): stop as not converging once the relative
         change of s_n has not fallen below the one that many outer iterations before (0: run to
         fixed_point_max); result.extra["outer_changes"] holds the change of every outer iteration."""
         if method not in METHODS:
@@ -441,6 +452,8 @@ class ContactProblem:
             raise ValueError(f"linear must be one of {LINEAR_CORRECTIONS}, got {linear!r}")
         if lines is not None and not isinstance(lines, (bool, np.bool_)):
             raise ValueError(f"lines must be True or False, got {lines!r}")
+        if ordering is None and CORE_RENUMBERS:
+            ordering = self.default_ordering
         kw = dict(tol=float(tol), rtol=float(rtol), max_cycles=int(max_cycles), fixed_point_tol=float(fixed_point_tol),
                   fixed_point_max=int(fixed_point_max), reference=error_reference)
         if SOLVE_TAKES_THREADS:
