@@ -106,6 +106,15 @@ py::array_t<double> moved_to_numpy(std::vector<double>&& v, std::vector<py::ssiz
   return py::array_t<double>(shape, owned->data(), free_it);
 }
 
+// the lines of a line smoother as a list of node-id arrays, each in chain order
+py::list lines_to_list(const LineSet& L) {
+  py::list out;
+  for (Index k = 0; k < L.num_lines(); ++k)
+    out.append(to_numpy(std::vector<Index>(L.nodes.begin() + L.ptr[k], L.nodes.begin() + L.ptr[k + 1]),
+                        {(py::ssize_t)(L.ptr[k + 1] - L.ptr[k])}));
+  return out;
+}
+
 template <int d>
 py::dict result_to_dict(SolveResult& R, const ContactSolver<d>& S) {
   const Index n = S.num_nodes(), nc = S.num_contact();
@@ -388,21 +397,11 @@ void bind_dim(py::module_& m) {
            "frames, Dirichlet dofs masked): PCG preconditioned by the truncated linear cycle for K w = M r, r in the "
            "frames. Returns (w, energies after each iteration)")
       .def("fine_lines", [](CS& S, bool lines) {
-             const LineSet L = S.fine_lines(lines);
-             py::list out;
-             for (Index k = 0; k < L.num_lines(); ++k)
-               out.append(to_numpy(std::vector<Index>(L.nodes.begin() + L.ptr[k], L.nodes.begin() + L.ptr[k + 1]),
-                                   {(py::ssize_t)(L.ptr[k + 1] - L.ptr[k])}));
-             return out;
+             return lines_to_list(S.fine_lines(lines));
            }, py::arg("lines") = true, "the lines of the fine line smoother (node ids in chain order)")
       .def("coarse_lines", [](const CS& S, int l) {
              if (l < 0 || l >= S.hierarchy().num_coarse_levels()) throw py::index_error("no such coarse level");
-             const LineSet L = S.coarse_lines(l);
-             py::list out;
-             for (Index k = 0; k < L.num_lines(); ++k)
-               out.append(to_numpy(std::vector<Index>(L.nodes.begin() + L.ptr[k], L.nodes.begin() + L.ptr[k + 1]),
-                                   {(py::ssize_t)(L.ptr[k + 1] - L.ptr[k])}));
-             return out;
+             return lines_to_list(S.coarse_lines(l));
            }, py::arg("level"), "the lines of coarse level `level` (node ids in chain order)")
       .def("enable_tied_correction", &CS::enable_tied_correction,
            "after each nmg coarse correction a second one, without bounds, with every contact dof frozen (two bodies)")
@@ -423,11 +422,7 @@ void bind_dim(py::module_& m) {
     gs.factor(A, act.empty() ? nullptr : act.data());
     std::vector<double> x(x0.data(), x0.data() + A.rows * d);
     for (int s = 0; s < sweeps; ++s) gs.sweep(A, act.empty() ? nullptr : act.data(), b.data(), x.data(), s % 2 == 0);
-    py::list lines;
-    const LineSet& L = gs.lines();
-    for (Index k = 0; k < L.num_lines(); ++k)
-      lines.append(to_numpy(std::vector<Index>(L.nodes.begin() + L.ptr[k], L.nodes.begin() + L.ptr[k + 1]), {(py::ssize_t)(L.ptr[k + 1] - L.ptr[k])}));
-    return py::make_tuple(to_numpy(x, {(py::ssize_t)A.rows, d}), lines);
+    return py::make_tuple(to_numpy(x, {(py::ssize_t)A.rows, d}), lines_to_list(gs.lines()));
   }, py::arg("A"), py::arg("b"), py::arg("x0"), py::arg("sweeps") = 1, py::arg("active") = py::none(),
      "Line Gauss-Seidel (mg/line_smoother.hpp): the lines of A found from the matrix, `sweeps` sweeps (alternating, "
      "forward first) for A x = b from x0, active (n, d): 0 on truncated dofs. Returns (x, lines)");
