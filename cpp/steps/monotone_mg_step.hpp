@@ -13,14 +13,6 @@
 
 namespace cmg {
 
-// What the coarse problem was built for: the truncation mask and the Hessian blocks of the fine
-// diagonal. The hierarchy is updated when the next linearization differs.
-template <int d>
-struct BuiltLinearization {
-  std::vector<std::uint8_t> mask;
-  std::vector<std::pair<Index, Mat<d>>> hessian;
-};
-
 template <int d>
 bool same_blocks(const std::vector<std::pair<Index, Mat<d>>>& a, const std::vector<std::pair<Index, Mat<d>>>& b) {
   if (a.size() != b.size()) return false;
@@ -28,6 +20,25 @@ bool same_blocks(const std::vector<std::pair<Index, Mat<d>>>& a, const std::vect
     if (a[k].first != b[k].first || a[k].second != b[k].second) return false;
   return true;
 }
+
+// What the coarse problem was built for: the truncation mask and the Hessian blocks of the fine
+// diagonal. The hierarchy is updated when the next linearization differs.
+template <int d>
+struct BuiltLinearization {
+  std::vector<std::uint8_t> mask;
+  std::vector<std::pair<Index, Mat<d>>> hessian;
+
+  // Brings the coarse levels H to the linearization (m, h) of the fine matrix A where it differs
+  // from the one they were built for; returns whether they changed.
+  bool update(GalerkinHierarchy<d>& H, const BlockMatrix<d>& A, const std::vector<std::uint8_t>& m,
+              const std::vector<std::pair<Index, Mat<d>>>& h) {
+    if (m == mask && same_blocks<d>(h, hessian)) return false;
+    H.update(A, mask.data(), m.data(), hessian, h);
+    mask = m;
+    hessian = h;
+    return true;
+  }
+};
 
 template <int d, class L>
 class MonotoneMultigridStep {
@@ -56,12 +67,7 @@ class MonotoneMultigridStep {
     const bool bounded = linearize();
     pc.lap(Phase::Linearize);
     const bool state_changed = mask_ != built_.mask;
-    rebuilt = state_changed || !same_blocks<d>(hessian_, built_.hessian);
-    if (rebuilt) {
-      H_.update(A, built_.mask.data(), mask_.data(), built_.hessian, hessian_);
-      built_.mask = mask_;
-      built_.hessian = hessian_;
-    }
+    rebuilt = built_.update(H_, A, mask_, hessian_);
     pc.lap(Phase::CoarseUpdate);
     // u += P~ c: prolongated straight into the iterate (no fine vector for the correction)
     C_.correction(opt_, r_.data(), mask_.data(), NodeBounds{&P_.contact_nodes(), lo_.data(), hi_.data()}, bounded, u.data(),

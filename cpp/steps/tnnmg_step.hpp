@@ -68,12 +68,7 @@ class TnnmgStep {
     for (std::size_t k = 0; k < r_.size(); ++k) r_[k] = f[k] - tmp_[k];
     linearize();
     pc.lap(Phase::Linearize);
-    rebuilt = mask_ != built_.mask || !same_blocks<d>(hessian_, built_.hessian);
-    if (rebuilt) {
-      H_.update(A, built_.mask.data(), mask_.data(), built_.hessian, hessian_);
-      built_.mask = mask_;
-      built_.hessian = hessian_;
-    }
+    rebuilt = built_.update(H_, A, mask_, hessian_);
     pc.lap(Phase::CoarseUpdate);
     linear_correction();
     step_ = line_search();
