@@ -2,7 +2,7 @@
 nodes for F = 0 and 0.4, the linear cycles with the contact state known (F = 0.4), the TNNMG cycles
 (F = 0 and 0.4), nmg/linear time ratio (F = 0.4), seconds, peak RSS; one level per fresh process.
 
-    python benchmarks/cork_levels.py --levels 2 4 [--json out/cork_levels.json]
+    python benchmarks/cork_levels.py --levels 2 4 [--layers 8] [--json out/cork_levels.json]
 """
 import argparse
 import json
@@ -12,11 +12,11 @@ import sys
 CHILD = r"""
 import json, resource, sys, time
 from contactmg import cork
-L = int(sys.argv[1])
+L, layers = int(sys.argv[1]), int(sys.argv[2])
 out = {"level": L}
 for F in (0.0, 0.4):
     t0 = time.perf_counter()
-    p = cork.cork_problem(L, F)
+    p = cork.cork_problem(L, F, axial_layers=layers)
     p.solver
     out["setup_seconds"] = time.perf_counter() - t0
     res = p.solve(tol=1e-11)
@@ -37,13 +37,14 @@ print(json.dumps(out))
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--levels", type=int, nargs=2, default=[2, 4])
+    ap.add_argument("--layers", type=int, default=None, help="axial layers of the coarse mesh (default: the shipped one)")
     ap.add_argument("--json")
     a = ap.parse_args()
     rows = []
     print(f"{'lvl':>3} {'dofs':>8} {'cyc F=0':>7} {'cyc .4':>6} {'push F=0':>9} {'push .4':>8} {'stick':>6} {'slip':>5} "
           f"{'lin cyc':>7} {'tnnmg F=0/.4':>12} {'nmg/lin':>7} {'solve s':>8} {'peak MB':>8}")
     for L in range(a.levels[0], a.levels[1] + 1):
-        r = subprocess.run([sys.executable, "-c", CHILD, str(L)], capture_output=True, text=True)
+        r = subprocess.run([sys.executable, "-c", CHILD, str(L), str(a.layers or 0)], capture_output=True, text=True)
         if r.returncode != 0:
             print(f"{L:3d} failed: {r.stderr.strip().splitlines()[-1] if r.stderr else r.returncode}")
             break

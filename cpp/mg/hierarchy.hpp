@@ -208,21 +208,30 @@ class GalerkinHierarchy {
     // it once and refactorizing a different pattern wrote out of bounds (tilted obstacles). The
     // coarsest matrix is small, so it is analysed every time.
     ldlt_.compute(S);
-    if (!factorization_ok()) {
+    const Eigen::VectorXd diag = S.diagonal();
+    if (!factorization_ok(diag)) {
       // Truncation through rotated fine frames can make coarse dofs linearly dependent: the Galerkin
       // matrix is then only semi-definite, with a right-hand side P~^T r in its range. Solving with
       // A + eps diag(A) still lowers the energy (J(x) = -x^T A x / 2 - eps x^T D x <= 0).
       for (Index k = 0; k < n; ++k) S.coeffRef(k, k) *= 1 + 1e-10;
       ldlt_.compute(S);
-      if (!factorization_ok())
+      if (!factorization_ok(diag))
         throw InputError("the coarsest-level matrix is singular: is rigid-body motion left free by the Dirichlet conditions?");
     }
   }
 
-  bool factorization_ok() const {
+  // Each pivot against its own row's diagonal entry, not against the largest pivot: the friction
+  // Hessian s (I - t t^T)/|u_T| of a node that has just begun to slide (a load step's tiny slip
+  // increment) put entries of 1e12 on the coarsest diagonal next to entries of 1e2 (largest pivot
+  // 4e17, smallest 11.5), and that positive definite matrix was refused as singular (the 8-layer
+  // cork's load path, step 2).
+  bool factorization_ok(const Eigen::VectorXd& diag) const {
     if (ldlt_.info() != Eigen::Success) return false;
     const auto D = ldlt_.vectorD();
-    return D.minCoeff() > 1e-13 * D.cwiseAbs().maxCoeff();
+    const auto& to = ldlt_.permutationP().indices();  // row i of S is row to[i] of the factor
+    for (Index i = 0; i < (Index)diag.size(); ++i)
+      if (!(D[to[i]] > 1e-13 * diag[i])) return false;
+    return true;
   }
 
   std::vector<BlockMatrix<d>> P_;

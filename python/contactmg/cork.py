@@ -52,14 +52,14 @@ def neck(radius: float = RADIUS, clearance: float = CLEARANCE, interference: flo
 
 def cork_problem(levels: int = DEFAULT_LEVELS, friction: float = 0.4, push: float = PUSH,
                  coulomb_at_zero: bool = False, cycle: str = "F", nu1: int = 3, nu2: int = 3,
-                 material: Material = None) -> ContactProblem:
+                 material: Material = None, axial_layers: int = None) -> ContactProblem:
     """The cork (hexahedra) with its top pushed by (0, 0, -push) into the neck, Coulomb friction F
-    (frictionless for F = 0 unless coulomb_at_zero)."""
+    (frictionless for F = 0 unless coulomb_at_zero); axial_layers of the coarse mesh (default AXIAL_LAYERS)."""
     if isinstance(friction, bool) or not isinstance(friction, (int, float)) or not math.isfinite(friction) or friction < 0:
         raise ValueError(f"the friction coefficient must be a finite number >= 0, got {friction!r}")
     if isinstance(push, bool) or not isinstance(push, (int, float)) or not math.isfinite(push) or not 0 <= push <= 0.1 * LENGTH:
         raise ValueError(f"the push D must lie in [0, {0.1 * LENGTH}] (small deformations), got {push!r}")
-    mesh = cylinder(RADIUS, LENGTH, k=K, ring_layers=RING_LAYERS, nz=AXIAL_LAYERS)
+    mesh = cylinder(RADIUS, LENGTH, k=K, ring_layers=RING_LAYERS, nz=axial_layers or AXIAL_LAYERS)
     hierarchy = MeshHierarchy.build(mesh, levels, projector=CylinderProjector(RADIUS))
     law = Coulomb(friction) if (friction > 0 or coulomb_at_zero) else Frictionless()
     return ContactProblem(hierarchy, material or Material(E, NU), [Dirichlet([CORK_TOP], (0.0, 0.0, -push))],
