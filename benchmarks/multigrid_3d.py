@@ -47,7 +47,7 @@ def main():
     ap.add_argument("--geometries", nargs="+", default=["box", "ball", "cork"])
     ap.add_argument("--cells", nargs="+", default=["tetra", "hexahedron"])
     ap.add_argument("--levels", type=int, nargs=2, default=[2, 4])
-    ap.add_argument("--cycles", nargs="+", default=["V33"], help="type and nu1 nu2, e.g. V33 F55")
+    ap.add_argument("--cycles", nargs="+", default=["V33", "F33"], help="type and nu1 nu2, e.g. V33 F55")
     ap.add_argument("--count", type=int, default=30, help="cycles per rate measurement")
     ap.add_argument("--json")
     a = ap.parse_args()
