@@ -67,8 +67,9 @@ def matrix_bytes(m) -> int:
 
 
 def transfer_bytes(t, d: int) -> int:
-    # the core holds a prolongation as d x d blocks with 32-bit columns and 64-bit row pointers
-    return len(t.parent) * (8 * d * d + 4) + 8 * (t.n_fine + 1)
+    # the core holds a prolongation as scalar weights with 32-bit columns and 64-bit row pointers
+    # (mg/prolongation.hpp; the rotations of the few contact rows left out)
+    return len(t.parent) * (8 + 4) + 8 * (t.n_fine + 1)
 
 
 def cycle_bytes(p, S) -> dict:

@@ -440,7 +440,7 @@ void bind_dim(py::module_& m) {
   m.def(("restrict_bounds_" + sfx).c_str(), [](Index n_fine, Index n_coarse, IArr ptr, IArr parent, DArr weight, py::object mask,
                                                DArr lo, DArr hi) {
     if (ptr.size() != n_fine + 1) throw InputError("ptr must have n_fine + 1 entries");
-    BlockMatrix<d> P = make_prolongation<d>(n_fine, n_coarse, ptr.data(), parent.data(), weight.data());
+    Prolongation<d> P = make_prolongation<d>(n_fine, n_coarse, ptr.data(), parent.data(), weight.data());
     require_shape(lo, "lo", {(py::ssize_t)n_fine, d}); require_shape(hi, "hi", {(py::ssize_t)n_fine, d});
     BArr mk;
     const std::uint8_t* mp = nullptr;
@@ -483,7 +483,7 @@ void bind_dim(py::module_& m) {
   "Hessian of s |u_T| (frame components, free tangential mask) at a sliding node");
   m.def(("galerkin_product_" + sfx).c_str(), [](const BM& A, Index n_coarse, IArr ptr, IArr parent, DArr weight) {
     if (ptr.size() != A.rows + 1) throw InputError("ptr must have num_fine + 1 entries");
-    BlockMatrix<d> P = make_prolongation<d>(A.rows, n_coarse, ptr.data(), parent.data(), weight.data());
+    Prolongation<d> P = make_prolongation<d>(A.rows, n_coarse, ptr.data(), parent.data(), weight.data());
     auto C = std::make_shared<BM>();
     GalerkinProduct<d> gp;
     gp.build(A, P, nullptr, *C);

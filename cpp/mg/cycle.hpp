@@ -108,7 +108,7 @@ class CoarseCycle {
       if (!add) std::fill(w, w + n_fine * d, 0.0);
       return;
     }
-    const BlockMatrix<d>& P = H_.prolongation(top);
+    const Prolongation<d>& P = H_.prolongation(top);
     Vectors& C = lv_[top];
     restrict_residual<d>(P, mask, r_fine, C.b.data(), C.r.data());  // C.r: scratch until level top smooths
     if (bounded) restrict_bounds<d>(P, mask, bounds, C.lo.data(), C.hi.data());
@@ -159,7 +159,7 @@ class CoarseCycle {
     for (int s = 0; s < opt.nu1; ++s) sweep(l, true, order);
     const int visits = type == CycleType::V ? 1 : 2;
     Vectors& C = lv_[l - 1];
-    const BlockMatrix<d>& P = H_.prolongation(l - 1);
+    const Prolongation<d>& P = H_.prolongation(l - 1);
     for (int v = 0; v < visits; ++v) {
       A.multiply(L.x.data(), L.r.data());
       parallel_for((Index)L.r.size(), [&](Index k) { L.r[k] = L.b[k] - L.r[k]; });

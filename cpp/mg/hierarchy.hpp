@@ -38,7 +38,7 @@ class GalerkinHierarchy {
   };
 
   // P[l] prolongs level l to level l+1; P.back() ends on the fine level.
-  explicit GalerkinHierarchy(std::vector<BlockMatrix<d>> P) : P_(std::move(P)) {
+  explicit GalerkinHierarchy(std::vector<Prolongation<d>> P) : P_(std::move(P)) {
     const int nc = (int)P_.size();
     lv_.resize(nc);
     gp_.resize(nc);
@@ -49,7 +49,7 @@ class GalerkinHierarchy {
   int num_coarse_levels() const { return (int)lv_.size(); }
   const Level& level(int l) const { return lv_[l]; }
   const BlockMatrix<d>& matrix(int l) const { return lv_[l].A; }
-  const BlockMatrix<d>& prolongation(int l) const { return P_[l]; }
+  const Prolongation<d>& prolongation(int l) const { return P_[l]; }
   const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>& coarsest_factor() const { return ldlt_; }
   int rebuilds() const { return rebuilds_; }
   double rebuild_seconds() const { return rebuild_seconds_; }
@@ -101,7 +101,7 @@ class GalerkinHierarchy {
     if (incremental_ >= kFullRebuildEvery) { rebuild(A, new_mask, new_hessian); return; }
     const auto t0 = std::chrono::steady_clock::now();
     const int top = nc - 1;
-    const BlockMatrix<d>& P = P_[top];
+    const Prolongation<d>& P = P_[top];
     for (const auto& [i, H] : old_hessian) add_fine_diagonal(i, -H, old_mask);
     for (Index i = 0; i < A.rows; ++i)
       for (int a = 0; a < d; ++a) {
@@ -109,7 +109,7 @@ class GalerkinHierarchy {
         if (old_mask[k] == new_mask[k]) continue;
         const double delta = new_mask[k] ? 1.0 : -1.0;
         for (Index b = P.indptr[i]; b < P.indptr[i + 1]; ++b) {
-          const Vec<d> p = delta * P.block(b).row(a).transpose();
+          const Vec<d> p = delta * P.block(i, b).row(a).transpose();
           if (p.isZero(0.0)) continue;
           const Index I = P.indices[b];
           for (Index q = A.indptr[i]; q < A.indptr[i + 1]; ++q) {
@@ -118,8 +118,9 @@ class GalerkinHierarchy {
             for (int c = 0; c < d; ++c) { vn[c] *= new_mask[j * d + c]; vo[c] *= old_mask[j * d + c]; }
             for (Index b2 = P.indptr[j]; b2 < P.indptr[j + 1]; ++b2) {
               const Index J = P.indices[b2];
-              add_delta(top, I, J, p * (vn * P.block(b2)));
-              add_delta(top, J, I, (p * (vo * P.block(b2))).transpose());
+              const Mat<d> Pj = P.block(j, b2);
+              add_delta(top, I, J, p * (vn * Pj));
+              add_delta(top, J, I, (p * (vo * Pj)).transpose());
             }
           }
         }
@@ -153,14 +154,14 @@ class GalerkinHierarchy {
   // top coarse level += P~_i^T H P~_i for a block H on the diagonal of fine node i
   void add_fine_diagonal(Index i, const Mat<d>& H, const std::uint8_t* mask) {
     const int top = (int)lv_.size() - 1;
-    const BlockMatrix<d>& P = P_[top];
+    const Prolongation<d>& P = P_[top];
     Mat<d> Hm = H;
     for (int a = 0; a < d; ++a)
       for (int b = 0; b < d; ++b) Hm(a, b) *= (mask ? mask[i * d + a] * mask[i * d + b] : 1);
     if (Hm.isZero(0.0)) return;
     for (Index b1 = P.indptr[i]; b1 < P.indptr[i + 1]; ++b1)
       for (Index b2 = P.indptr[i]; b2 < P.indptr[i + 1]; ++b2)
-        add_delta(top, P.indices[b1], P.indices[b2], P.block(b1).transpose() * Hm * P.block(b2));
+        add_delta(top, P.indices[b1], P.indices[b2], P.block(i, b1).transpose() * Hm * P.block(i, b2));
   }
 
   // Applies the pending changes level by level, each propagated to the next coarser level first.
@@ -168,11 +169,11 @@ class GalerkinHierarchy {
     for (int l = (int)lv_.size() - 1; l >= 0; --l) {
       Level& L = lv_[l];
       if (l > 0) {  // propagate before applying: the entries of delta_[l] are what changed on level l
-        const BlockMatrix<d>& Pl = P_[l - 1];
+        const Prolongation<d>& Pl = P_[l - 1];
         for (const auto& e : delta_[l])
           for (Index b = Pl.indptr[e.i]; b < Pl.indptr[e.i + 1]; ++b)
             for (Index b2 = Pl.indptr[e.j]; b2 < Pl.indptr[e.j + 1]; ++b2)
-              add_delta(l - 1, Pl.indices[b], Pl.indices[b2], Pl.block(b).transpose() * e.M * Pl.block(b2));
+              add_delta(l - 1, Pl.indices[b], Pl.indices[b2], Pl.block(e.i, b).transpose() * e.M * Pl.block(e.j, b2));
       }
       for (const auto& e : delta_[l]) {
         L.A.block(e.pos) += e.M;
@@ -225,7 +226,7 @@ class GalerkinHierarchy {
     return D.minCoeff() > 1e-13 * D.cwiseAbs().maxCoeff();
   }
 
-  std::vector<BlockMatrix<d>> P_;
+  std::vector<Prolongation<d>> P_;
   std::vector<Level> lv_;
   std::vector<GalerkinProduct<d>> gp_;
   std::vector<std::vector<DeltaEntry>> delta_;  // pending incremental change of each level's A
