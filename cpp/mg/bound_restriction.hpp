@@ -41,6 +41,19 @@ void restrict_bounds(const Prolongation<d>& P, const std::uint8_t* mask, const d
   for (Index i = 0; i < P.rows; ++i) restrict_row_bounds<d>(P, mask, i, lo_f + i * d, hi_f + i * d, lo_c, hi_c);
 }
 
+// The same for the slack lo - x, hi - x that remains to an iterate x on the fine level, formed per
+// row (a scratch pair of fine vectors and a pass less, issue 15; the same bits).
+template <int d>
+void restrict_slack(const Prolongation<d>& P, const double* lo_f, const double* hi_f, const double* x, double* lo_c, double* hi_c) {
+  std::fill(lo_c, lo_c + d * P.cols, -kInf);
+  std::fill(hi_c, hi_c + d * P.cols, kInf);
+  for (Index i = 0; i < P.rows; ++i) {
+    double lo[d], hi[d];
+    for (int c = 0; c < d; ++c) { lo[c] = lo_f[i * d + c] - x[i * d + c]; hi[c] = hi_f[i * d + c] - x[i * d + c]; }
+    restrict_row_bounds<d>(P, nullptr, i, lo, hi, lo_c, hi_c);
+  }
+}
+
 // Fine correction bounds that can be finite only at some nodes (the contact nodes): lo, hi hold
 // d entries for each of `nodes` (the fine vectors of bounds were 16 bytes per dof, issue 15).
 struct NodeBounds {

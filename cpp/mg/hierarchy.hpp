@@ -4,6 +4,7 @@
 // by incremental updates, and the factorized coarsest matrix.
 #pragma once
 #include <chrono>
+#include <unordered_map>
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 #include "mg/galerkin.hpp"
@@ -56,7 +57,6 @@ class GalerkinHierarchy {
   std::size_t memory_bytes() const {
     std::size_t s = 0;
     for (auto& L : lv_) s += L.A.memory_bytes() + sizeof(double) * L.Dinv.size() + L.lines.memory_bytes() + L.inert.size();
-    for (auto& v : slot_) s += sizeof(std::int32_t) * v.size();
     for (auto& P : P_) s += P.memory_bytes();
     return s;
   }
@@ -72,7 +72,6 @@ class GalerkinHierarchy {
       gp_[l].build(Af, P_[l], l == nc - 1 ? mask : nullptr, lv_[l].A);
       lv_[l].scale = max_diagonal<d>(lv_[l].A);
       invert_diagonal<d>(lv_[l].A, lv_[l].Dinv, lv_[l].inert, lv_[l].scale);
-      if (slot_[l].size() != lv_[l].A.indices.size()) slot_[l].assign(lv_[l].A.indices.size(), -1);
       if (!lines_found_) lv_[l].lines = LineGaussSeidel<d>(find_lines<d>(lv_[l].A));
     }
     lines_found_ = true;
@@ -142,13 +141,9 @@ class GalerkinHierarchy {
 
   void add_delta(int l, Index I, Index J, const Mat<d>& M) {
     const Index pos = lv_[l].A.find(I, J);
-    std::int32_t& s = slot_[l][pos];
-    if (s < 0) {
-      s = (std::int32_t)delta_[l].size();
-      delta_[l].push_back({pos, I, J, M});
-    } else {
-      delta_[l][s].M += M;
-    }
+    const auto [it, fresh] = slot_[l].try_emplace(pos, (std::int32_t)delta_[l].size());
+    if (fresh) delta_[l].push_back({pos, I, J, M});
+    else delta_[l][it->second].M += M;
   }
 
   // top coarse level += P~_i^T H P~_i for a block H on the diagonal of fine node i
@@ -175,10 +170,8 @@ class GalerkinHierarchy {
             for (Index b2 = Pl.indptr[e.j]; b2 < Pl.indptr[e.j + 1]; ++b2)
               add_delta(l - 1, Pl.indices[b], Pl.indices[b2], Pl.block(e.i, b).transpose() * e.M * Pl.block(e.j, b2));
       }
-      for (const auto& e : delta_[l]) {
-        L.A.block(e.pos) += e.M;
-        slot_[l][e.pos] = -1;
-      }
+      for (const auto& e : delta_[l]) L.A.block(e.pos) += e.M;
+      slot_[l].clear();
       for (const auto& e : delta_[l]) invert_diagonal<d>(L.A, L.Dinv, L.inert, L.scale, e.i, e.i + 1);
       if (!delta_[l].empty()) factor_lines(l);
       delta_[l].clear();
@@ -230,7 +223,9 @@ class GalerkinHierarchy {
   std::vector<Level> lv_;
   std::vector<GalerkinProduct<d>> gp_;
   std::vector<std::vector<DeltaEntry>> delta_;  // pending incremental change of each level's A
-  std::vector<std::vector<std::int32_t>> slot_;  // position in A -> entry of delta_, or -1 (32 bits: 4 bytes a coarse block)
+  // position in A -> its entry of delta_: a map of the few touched blocks (a vector over every
+  // coarse block was 5 bytes a dof at level 9, issue 15)
+  std::vector<std::unordered_map<Index, std::int32_t>> slot_;
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt_;
   int rebuilds_ = 0, incremental_ = 0;
   bool lines_found_ = false;
