@@ -67,8 +67,9 @@ def matrix_bytes(m) -> int:
 
 
 def transfer_bytes(t, d: int) -> int:
-    # the core holds a prolongation as d x d blocks with 32-bit columns and 64-bit row pointers
-    return len(t.parent) * (8 * d * d + 4) + 8 * (t.n_fine + 1)
+    # the core holds a prolongation as scalar weights with 32-bit columns and 64-bit row pointers
+    # (mg/prolongation.hpp; the rotations of the few contact rows left out)
+    return len(t.parent) * (8 + 4) + 8 * (t.n_fine + 1)
 
 
 def cycle_bytes(p, S) -> dict:
@@ -131,11 +132,17 @@ def time_level(make, label, repeats, threads, stream):
         spc = float(np.median([r.solve_seconds / r.cycles for r in rs]))
         sweeps = float(np.median([(r.phase_seconds["presmooth"] + r.phase_seconds["postsmooth"]) / (nu * r.cycles) for r in rs]))
         rate = stream.get(f"core_{t}", stream["numpy_1"]) * 1e9
+        # where a cycle's time goes: the step's phases (norm: the Anderson mixing and the fused
+        # A (u - u_old) pass; linearize: the fine residual and the contact linearization) and the
+        # rest of the loop (the energy record, the step's setup), ms per cycle, medians
+        phases = {k: 1e3 * float(np.median([r.phase_seconds.get(k, 0.0) / r.cycles for r in rs]))
+                  for k in ("presmooth", "linearize", "coarse_update", "coarse_correction", "postsmooth", "norm", "check")}
+        phases["other"] = 1e3 * spc - sum(phases.values())
         out.append(dict(case=label, dofs=d * n, config=name, renumbered=bool(getattr(S, "renumbered", False)), threads=t,
                         cycles=rs[0].cycles, seconds_per_cycle=spc, seconds_per_fine_sweep=sweeps,
                         sweep_bytes=b["sweep"], sweep_gbs=b["sweep"] / sweeps / 1e9, cycle_bytes=b["total"],
                         cycle_gbs=b["total"] / spc / 1e9, stream_gbs=rate / 1e9, cycle_over_stream=spc / (b["total"] / rate),
-                        converged=all(r.converged for r in rs), load=load()))
+                        converged=all(r.converged for r in rs), load=load(), phase_ms=phases))
         print(json.dumps(out[-1]), flush=True)
     base = {(r["config"], r["threads"]): r["seconds_per_cycle"] for r in out}
     for r in out:
@@ -154,6 +161,25 @@ def table(res) -> str:
         lines.append(f"| {r['case']} | {r['dofs']:,} | {r['config']} | {r['threads']} | {r['cycles']} | {r['seconds_per_cycle']:.3f} | "
                      f"{r['speedup_vs_lex_1']:.2f}x | {r['seconds_per_fine_sweep']:.4f} | {r['sweep_gbs']:.2f} | "
                      f"{r['cycle_bytes'] / 1e6:.0f} | {r['cycle_gbs']:.2f} | {r['cycle_over_stream']:.2f} | {r['load']} |")
+    # issue 15's figures: the default storage (by colours) on 1 and 2 threads
+    lines += ["", "Issue 15 targets, coloured stored by colours (2 thr / 1 thr >= 1.6x; cycle / stream time <= 1.5 on 1 thread):", "",
+              "| case | dofs | cycles | s/cycle 1 thr | s/cycle 2 thr | 2 thr / 1 thr | cycle / stream time 1 thr | 2 thr |",
+              "| --- | --- | --- | --- | --- | --- | --- | --- |"]
+    by = {(r["case"], r["threads"]): r for r in res["rows"] if r["config"] == "coloured, by colours"}
+    for case in dict.fromkeys(r["case"] for r in res["rows"]):
+        a, b = by.get((case, 1)), by.get((case, 2))
+        if a and b:
+            lines.append(f"| {case} | {a['dofs']:,} | {a['cycles']} | {a['seconds_per_cycle']:.3f} | {b['seconds_per_cycle']:.3f} | "
+                         f"{a['seconds_per_cycle'] / b['seconds_per_cycle']:.2f}x | {a['cycle_over_stream']:.2f} | {b['cycle_over_stream']:.2f} |")
+    lines += ["", "Where a cycle's time goes (ms per cycle; fine sweeps = presmooth + postsmooth; norm = Anderson mixing + the fused "
+              "A (u - u_old) pass; linearize includes the fine residual; other = the loop's energy record and the step's setup):", "",
+              "| case | config | threads | presmooth | postsmooth | linearize | coarse update | coarse correction | norm | check | other |",
+              "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
+    for r in res["rows"]:
+        ph = r.get("phase_ms", {})
+        lines.append(f"| {r['case']} | {r['config']} | {r['threads']} | " +
+                     " | ".join(f"{ph.get(k, float('nan')):.1f}" for k in
+                                ("presmooth", "postsmooth", "linearize", "coarse_update", "coarse_correction", "norm", "check", "other")) + " |")
     return "\n".join(lines)
 
 

@@ -4,6 +4,7 @@
 // elsewhere; the dual mortar basis of two-body contact will be a sparse T of the same role.
 #pragma once
 #include "block_matrix.hpp"
+#include "mg/prolongation.hpp"
 
 namespace cmg {
 
@@ -40,11 +41,8 @@ class BasisTransform {
     }
   }
   // P <- T^{-1} P for a prolongation onto this level (rows are the nodes of T)
-  void transform_prolongation(BlockMatrix<d>& P) const {
-    for (std::size_t c = 0; c < nodes_.size(); ++c) {
-      const Index i = nodes_[c];
-      for (Index k = P.indptr[i]; k < P.indptr[i + 1]; ++k) P.block(k) = Q_[c].transpose() * Mat<d>(P.block(k));
-    }
+  void transform_prolongation(Prolongation<d>& P) const {
+    for (std::size_t c = 0; c < nodes_.size(); ++c) P.rotate_row(nodes_[c], Q_[c].transpose());
   }
   // v <- T^T v (a load; and, T being orthogonal, canonical -> local coordinates)
   void to_local(double* v) const {

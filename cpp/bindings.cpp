@@ -440,7 +440,7 @@ void bind_dim(py::module_& m) {
   m.def(("restrict_bounds_" + sfx).c_str(), [](Index n_fine, Index n_coarse, IArr ptr, IArr parent, DArr weight, py::object mask,
                                                DArr lo, DArr hi) {
     if (ptr.size() != n_fine + 1) throw InputError("ptr must have n_fine + 1 entries");
-    BlockMatrix<d> P = make_prolongation<d>(n_fine, n_coarse, ptr.data(), parent.data(), weight.data());
+    Prolongation<d> P = make_prolongation<d>(n_fine, n_coarse, ptr.data(), parent.data(), weight.data());
     require_shape(lo, "lo", {(py::ssize_t)n_fine, d}); require_shape(hi, "hi", {(py::ssize_t)n_fine, d});
     BArr mk;
     const std::uint8_t* mp = nullptr;
@@ -483,7 +483,7 @@ void bind_dim(py::module_& m) {
   "Hessian of s |u_T| (frame components, free tangential mask) at a sliding node");
   m.def(("galerkin_product_" + sfx).c_str(), [](const BM& A, Index n_coarse, IArr ptr, IArr parent, DArr weight) {
     if (ptr.size() != A.rows + 1) throw InputError("ptr must have num_fine + 1 entries");
-    BlockMatrix<d> P = make_prolongation<d>(A.rows, n_coarse, ptr.data(), parent.data(), weight.data());
+    Prolongation<d> P = make_prolongation<d>(A.rows, n_coarse, ptr.data(), parent.data(), weight.data());
     auto C = std::make_shared<BM>();
     GalerkinProduct<d> gp;
     gp.build(A, P, nullptr, *C);
@@ -529,6 +529,33 @@ PYBIND11_MODULE(_core, m) {
     return triad_bytes_per_second(n, repeats) / 1e9;
   }, py::arg("n") = 40000000, py::arg("repeats") = 5, py::arg("threads") = 1,
   "GB/s of the triad a = b + 1.5 c over n doubles on `threads` threads (best of `repeats`; 24 bytes an entry)");
+  m.def("anderson_iterates", [](DArr M, DArr c, DArr x0, int steps, int refuse_every, int threads) {
+    const Index n = c.size(), m = M.ndim() == 2 ? M.shape(0) : 0;
+    if (m < 1 || n % m != 0) throw InputError("M must be m x m with m dividing the length of c");
+    require_shape(M, "M", {(py::ssize_t)m, (py::ssize_t)m}); require_shape(x0, "x0", {(py::ssize_t)n});
+    ThreadScope team(threads);
+    std::vector<double> x(x0.data(), x0.data() + n), gx(n);
+    SettledAnderson A;
+    py::array_t<double> out({(py::ssize_t)steps, (py::ssize_t)n});
+    py::array_t<std::uint8_t> mixed(steps);
+    int calls = 0;
+    for (int s = 0; s < steps; ++s) {
+      for (Index i = 0; i < n; ++i) {  // block-diagonal: M on every block of m entries
+        const Index b = i - i % m, r = i % m;
+        double v = c.data()[i];
+        for (Index j = 0; j < m; ++j) v += M.data()[r * m + j] * x[b + j];
+        gx[i] = v;
+      }
+      mixed.mutable_at(s) = A.step(x, gx, [&](std::vector<double>&, const std::vector<double>&) {
+        return refuse_every <= 0 || ++calls % refuse_every != 0;
+      });
+      x = gx;
+      std::copy(x.begin(), x.end(), out.mutable_data() + s * n);
+    }
+    return py::make_tuple(out, mixed);
+  }, py::arg("M"), py::arg("c"), py::arg("x0"), py::arg("steps"), py::arg("refuse_every") = 0, py::arg("threads") = 1,
+  "test hook: the iterates x <- mix(diag(M, M, ...) x + c) of steps/settled_anderson.hpp (every refuse_every-th candidate refused) "
+  "and whether each step took the mixed iterate");
   m.def("cell_table", [] {
     py::dict out;
     for (const CellInfo& c : cell_table()) {

@@ -87,10 +87,10 @@ class ContactProblem {
   // in the sweep -- the same bits as a stored one, and 16 bytes a dof less to hold and to stream
   // (issue 15) -- except on the rows where it is not the plain inverse (inert components,
   // pseudo-inverses), kept here.
+  // (the lookup of a special row out of line, so that the common case inlines into the sweep)
   Mat<d> diagonal_inverse(Index i) const {
     if (!special_row_[i]) return Mat<d>(A_.block(A_.diag[i])).inverse();
-    const auto it = std::lower_bound(special_.begin(), special_.end(), i, [](const auto& e, Index r) { return e.first < r; });
-    return it->second;
+    return special_inverse(i);
   }
   const std::vector<std::uint8_t>& base_mask() const { return base_mask_; }  // 0 on Dirichlet dofs (local)
   const std::vector<std::uint8_t>& fixed() const { return fixed_; }
@@ -132,6 +132,11 @@ class ContactProblem {
   double coefficient(Index c) const { return coef_[c]; }
 
  private:
+  __attribute__((noinline)) Mat<d> special_inverse(Index i) const {
+    const auto it = std::lower_bound(special_.begin(), special_.end(), i, [](const auto& e, Index r) { return e.first < r; });
+    return it->second;
+  }
+
   void keep_special_inverses() {
     const Index n = A_.rows;
     const double thr = 1e-12 * max_diagonal<d>(A_);

@@ -73,7 +73,7 @@ class ContactSolver {
   // A second, bounds-free coarse correction with every contact dof frozen after each coarse
   // correction of the nmg and fixed-point methods (steps/tied_correction.hpp; two bodies).
   void enable_tied_correction() {
-    std::vector<BlockMatrix<d>> P;
+    std::vector<Prolongation<d>> P;
     for (int l = 0; l < H_.num_coarse_levels(); ++l) P.push_back(H_.prolongation(l));
     tied_ = std::make_unique<TiedCorrection<d>>(P_, std::move(P));
   }
@@ -179,7 +179,7 @@ class ContactSolver {
     std::vector<double> f, fixed_values;
     std::vector<std::uint8_t> fixed;
     std::vector<Index> contact_nodes;
-    std::vector<BlockMatrix<d>> P;   // canonical blocks; the fine basis transform comes later
+    std::vector<Prolongation<d>> P;  // canonical weights; the fine basis transform comes later
     std::vector<Renumbering> order;  // per level, coarsest first; the fine one last
 
     Stored(BlockMatrix<d> A_in, const double* f_in, const std::uint8_t* fixed_in, const double* values_in,
@@ -243,7 +243,7 @@ class ContactSolver {
     H_.rebuild(P_.matrix(), built_.mask.data());
   }
 
-  std::vector<BlockMatrix<d>> transformed(std::vector<BlockMatrix<d>> P) const {
+  std::vector<Prolongation<d>> transformed(std::vector<Prolongation<d>> P) const {
     if (!P.empty()) P_.basis().transform_prolongation(P.back());
     return P;
   }

@@ -75,11 +75,11 @@ class Renumbering {
   }
 
   // The rows of A (a prolongation onto this level: its fine rows) in storage order.
-  template <int d>
-  void permute_rows(BlockMatrix<d>& A) const {
+  template <class M>
+  void permute_rows(M& A) const {
     if (identity()) return;
-    constexpr int bs = BlockMatrix<d>::bs;
-    BlockMatrix<d> B;
+    constexpr int bs = M::bs;
+    M B;
     B.rows = A.rows;
     B.cols = A.cols;
     B.indptr.assign(A.rows + 1, 0);
@@ -94,13 +94,13 @@ class Renumbering {
     A = std::move(B);
   }
   // The columns of A (a prolongation from this level: its coarse columns) in storage order.
-  template <int d>
-  void permute_columns(BlockMatrix<d>& A) const {
+  template <class M>
+  void permute_columns(M& A) const {
     if (!identity()) permute_columns(A, new_of_old());
   }
-  template <int d>
-  static void permute_columns(BlockMatrix<d>& A, const std::vector<Index>& new_of_old_) {
-    constexpr int bs = BlockMatrix<d>::bs;
+  template <class M>
+  static void permute_columns(M& A, const std::vector<Index>& new_of_old_) {
+    constexpr int bs = M::bs;
     std::vector<std::pair<ColIndex, Index>> row;
     std::vector<double> vals;
     for (Index i = 0; i < A.rows; ++i) {

@@ -2,7 +2,7 @@
 #pragma once
 #include <algorithm>
 #include <cmath>
-#include "block_matrix.hpp"
+#include "mg/prolongation.hpp"
 
 namespace cmg {
 
@@ -13,18 +13,18 @@ namespace cmg {
 // Coarse dofs that touch no bounded fine dof keep (-inf, inf).
 // The bounds of fine row i (components with mask 0 or no finite bound skipped) into lo_c, hi_c.
 template <int d>
-inline void restrict_row_bounds(const BlockMatrix<d>& P, const std::uint8_t* mask, Index i, const double* lo_i, const double* hi_i,
+inline void restrict_row_bounds(const Prolongation<d>& P, const std::uint8_t* mask, Index i, const double* lo_i, const double* hi_i,
                                 double* lo_c, double* hi_c) {
   for (int c = 0; c < d; ++c) {
     if ((mask && !mask[i * d + c]) || (lo_i[c] == -kInf && hi_i[c] == kInf)) continue;
     double sigma = 0;
     for (Index k = P.indptr[i]; k < P.indptr[i + 1]; ++k)
-      for (int a = 0; a < d; ++a) sigma += std::abs(P.block(k)(c, a));
+      for (int a = 0; a < d; ++a) sigma += std::abs(P.block(i, k)(c, a));
     const double scale = 1.0 / std::max(1.0, sigma);
     const double lo = lo_i[c] * scale, hi = hi_i[c] * scale;
     for (Index k = P.indptr[i]; k < P.indptr[i + 1]; ++k)
       for (int a = 0; a < d; ++a) {
-        const double w = P.block(k)(c, a);
+        const double w = P.block(i, k)(c, a);
         if (w == 0) continue;
         const Index g = P.indices[k] * d + a;
         if (w > 0) { hi_c[g] = std::min(hi_c[g], hi); lo_c[g] = std::max(lo_c[g], lo); }
@@ -34,11 +34,24 @@ inline void restrict_row_bounds(const BlockMatrix<d>& P, const std::uint8_t* mas
 }
 
 template <int d>
-void restrict_bounds(const BlockMatrix<d>& P, const std::uint8_t* mask, const double* lo_f, const double* hi_f, double* lo_c,
+void restrict_bounds(const Prolongation<d>& P, const std::uint8_t* mask, const double* lo_f, const double* hi_f, double* lo_c,
                      double* hi_c) {
   std::fill(lo_c, lo_c + d * P.cols, -kInf);
   std::fill(hi_c, hi_c + d * P.cols, kInf);
   for (Index i = 0; i < P.rows; ++i) restrict_row_bounds<d>(P, mask, i, lo_f + i * d, hi_f + i * d, lo_c, hi_c);
+}
+
+// The same for the slack lo - x, hi - x that remains to an iterate x on the fine level, formed per
+// row (a scratch pair of fine vectors and a pass less, issue 15; the same bits).
+template <int d>
+void restrict_slack(const Prolongation<d>& P, const double* lo_f, const double* hi_f, const double* x, double* lo_c, double* hi_c) {
+  std::fill(lo_c, lo_c + d * P.cols, -kInf);
+  std::fill(hi_c, hi_c + d * P.cols, kInf);
+  for (Index i = 0; i < P.rows; ++i) {
+    double lo[d], hi[d];
+    for (int c = 0; c < d; ++c) { lo[c] = lo_f[i * d + c] - x[i * d + c]; hi[c] = hi_f[i * d + c] - x[i * d + c]; }
+    restrict_row_bounds<d>(P, nullptr, i, lo, hi, lo_c, hi_c);
+  }
 }
 
 // Fine correction bounds that can be finite only at some nodes (the contact nodes): lo, hi hold
@@ -50,7 +63,7 @@ struct NodeBounds {
 };
 
 template <int d>
-void restrict_bounds(const BlockMatrix<d>& P, const std::uint8_t* mask, const NodeBounds& b, double* lo_c, double* hi_c) {
+void restrict_bounds(const Prolongation<d>& P, const std::uint8_t* mask, const NodeBounds& b, double* lo_c, double* hi_c) {
   std::fill(lo_c, lo_c + d * P.cols, -kInf);
   std::fill(hi_c, hi_c + d * P.cols, kInf);
   if (!b.nodes) return;

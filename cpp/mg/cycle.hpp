@@ -108,7 +108,7 @@ class CoarseCycle {
       if (!add) std::fill(w, w + n_fine * d, 0.0);
       return;
     }
-    const BlockMatrix<d>& P = H_.prolongation(top);
+    const Prolongation<d>& P = H_.prolongation(top);
     Vectors& C = lv_[top];
     restrict_residual<d>(P, mask, r_fine, C.b.data(), C.r.data());  // C.r: scratch until level top smooths
     if (bounded) restrict_bounds<d>(P, mask, bounds, C.lo.data(), C.hi.data());
@@ -136,16 +136,16 @@ class CoarseCycle {
     bool any_bounds = false;
   };
 
+  // (on all threads: the serial loops of a cycle hold back the second thread, issue 15)
   static void set_bounded(Vectors& L, bool bounded) {
-    L.any_bounds = false;
     const Index n = (Index)L.bounded.size();
-    for (Index i = 0; i < n; ++i) {
+    L.any_bounds = parallel_sum(n, [&](Index i) {
       bool b = false;
       if (bounded)
         for (int c = 0; c < d; ++c) b = b || L.lo[i * d + c] > -kInf || L.hi[i * d + c] < kInf;
       L.bounded[i] = b;
-      L.any_bounds = L.any_bounds || b;
-    }
+      return b ? 1.0 : 0.0;
+    }) > 0;
   }
 
   void sweep(int l, bool forward, const SweepOrder& order) {
@@ -167,18 +167,12 @@ class CoarseCycle {
     for (int s = 0; s < opt.nu1; ++s) sweep(l, true, order);
     const int visits = type == CycleType::V ? 1 : 2;
     Vectors& C = lv_[l - 1];
-    const BlockMatrix<d>& P = H_.prolongation(l - 1);
+    const Prolongation<d>& P = H_.prolongation(l - 1);
     for (int v = 0; v < visits; ++v) {
-      A.multiply(L.x.data(), L.r.data());
-      parallel_for((Index)L.r.size(), [&](Index k) { L.r[k] = L.b[k] - L.r[k]; });
+      A.residual(L.x.data(), L.b.data(), L.r.data());  // one pass (was a product and a vector pass)
       restrict_residual<d>(P, nullptr, L.r.data(), C.b.data(), C.r.data());
-      if (L.any_bounds) {
-        // the coarser level gets the slack that remains on this one
-        std::vector<double>& slo = scratch_lo_, &shi = scratch_hi_;
-        slo.resize(L.x.size()); shi.resize(L.x.size());
-        for (std::size_t k = 0; k < L.x.size(); ++k) { slo[k] = L.lo[k] - L.x[k]; shi[k] = L.hi[k] - L.x[k]; }
-        restrict_bounds<d>(P, nullptr, slo.data(), shi.data(), C.lo.data(), C.hi.data());
-      }
+      // the coarser level gets the slack that remains on this one
+      if (L.any_bounds) restrict_slack<d>(P, L.lo.data(), L.hi.data(), L.x.data(), C.lo.data(), C.hi.data());
       set_bounded(C, L.any_bounds);
       std::fill(C.x.begin(), C.x.end(), 0.0);
       cycle(opt, l - 1, (type == CycleType::F && v == 1) ? CycleType::V : type);
@@ -227,7 +221,6 @@ class CoarseCycle {
   const std::vector<SweepOrder>* cur_ = nullptr;  // the orders of the cycle under way
   bool lines_ = false;                            // line sweeps in the cycle under way
   std::vector<Vectors> lv_;
-  std::vector<double> scratch_lo_, scratch_hi_;
 };
 
 }  // namespace cmg

@@ -11,7 +11,7 @@ struct TransposedPattern {
   std::vector<Index> indptr;             // P.cols + 1
   std::vector<ColIndex> indices;         // fine row of each entry, ascending per coarse node
   std::vector<std::int32_t> position;    // its block in P
-  explicit TransposedPattern(const BlockMatrix<d>& P) {
+  explicit TransposedPattern(const Prolongation<d>& P) {
     if (P.nnz() >= (Index)std::numeric_limits<std::int32_t>::max()) throw InputError("a prolongation has too many entries");
     indptr.assign(P.cols + 1, 0);
     for (Index k = 0; k < P.nnz(); ++k) indptr[P.indices[k] + 1]++;
@@ -30,7 +30,7 @@ struct TransposedPattern {
 
 // The block pattern of P^T A P (PT: P's transposed pattern), a diagonal slot in every row; no values.
 template <int d>
-BlockMatrix<d> galerkin_pattern(const BlockMatrix<d>& A, const BlockMatrix<d>& P, const TransposedPattern<d>& PT) {
+BlockMatrix<d> galerkin_pattern(const BlockMatrix<d>& A, const Prolongation<d>& P, const TransposedPattern<d>& PT) {
   const Index nc = P.cols;
   BlockMatrix<d> C;
   C.rows = C.cols = nc;
@@ -66,7 +66,7 @@ class GalerkinProduct {
   // P's transposed pattern is formed per call and dropped after: kept, a transposed copy of every
   // prolongation was about 35 bytes per fine dof at level 9 (issue 15); forming it is one pass over
   // P, small beside the product. The blocks are read from P itself.
-  void build(const BlockMatrix<d>& A, const BlockMatrix<d>& P, const std::uint8_t* mask, BlockMatrix<d>& C) {
+  void build(const BlockMatrix<d>& A, const Prolongation<d>& P, const std::uint8_t* mask, BlockMatrix<d>& C) {
     const TransposedPattern<d> PT(P);
     if (!symbolic_done_) {
       C = galerkin_pattern<d>(A, P, PT);
@@ -79,7 +79,7 @@ class GalerkinProduct {
  private:
   // Row I of C is formed by one thread from the rows of P^T, in the same order on any thread count
   // (bit for bit); each thread keeps its own column -> position map.
-  void numeric(const BlockMatrix<d>& A, const BlockMatrix<d>& P, const TransposedPattern<d>& PT, const std::uint8_t* mask,
+  void numeric(const BlockMatrix<d>& A, const Prolongation<d>& P, const TransposedPattern<d>& PT, const std::uint8_t* mask,
                BlockMatrix<d>& C) {
     const Index nc = P.cols;
     std::fill(C.values.begin(), C.values.end(), 0.0);
@@ -91,7 +91,7 @@ class GalerkinProduct {
       for (Index k = C.indptr[I]; k < C.indptr[I + 1]; ++k) pos[C.indices[k]] = k;
       for (Index a = PT.indptr[I]; a < PT.indptr[I + 1]; ++a) {
         const Index i = PT.indices[a];
-        Z = P.block(PT.position[a]).transpose();  // (P_iI)^T
+        Z = P.block(i, PT.position[a]).transpose();  // (P_iI)^T
         if (mask)
           for (int c = 0; c < d; ++c) Z.col(c) *= mask[i * d + c];
         if (Z.isZero(0.0)) continue;
@@ -100,7 +100,7 @@ class GalerkinProduct {
           Y.noalias() = Z * A.block(k);
           if (mask)
             for (int c = 0; c < d; ++c) Y.col(c) *= mask[j * d + c];
-          for (Index b = P.indptr[j]; b < P.indptr[j + 1]; ++b) C.block(pos[P.indices[b]]).noalias() += Y * P.block(b);
+          for (Index b = P.indptr[j]; b < P.indptr[j + 1]; ++b) C.block(pos[P.indices[b]]).noalias() += Y * P.block(j, b);
         }
       }
     }, 256);

@@ -4,6 +4,7 @@
 // by incremental updates, and the factorized coarsest matrix.
 #pragma once
 #include <chrono>
+#include <unordered_map>
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 #include "mg/galerkin.hpp"
@@ -38,7 +39,7 @@ class GalerkinHierarchy {
   };
 
   // P[l] prolongs level l to level l+1; P.back() ends on the fine level.
-  explicit GalerkinHierarchy(std::vector<BlockMatrix<d>> P) : P_(std::move(P)) {
+  explicit GalerkinHierarchy(std::vector<Prolongation<d>> P) : P_(std::move(P)) {
     const int nc = (int)P_.size();
     lv_.resize(nc);
     gp_.resize(nc);
@@ -49,14 +50,13 @@ class GalerkinHierarchy {
   int num_coarse_levels() const { return (int)lv_.size(); }
   const Level& level(int l) const { return lv_[l]; }
   const BlockMatrix<d>& matrix(int l) const { return lv_[l].A; }
-  const BlockMatrix<d>& prolongation(int l) const { return P_[l]; }
+  const Prolongation<d>& prolongation(int l) const { return P_[l]; }
   const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>& coarsest_factor() const { return ldlt_; }
   int rebuilds() const { return rebuilds_; }
   double rebuild_seconds() const { return rebuild_seconds_; }
   std::size_t memory_bytes() const {
     std::size_t s = 0;
     for (auto& L : lv_) s += L.A.memory_bytes() + sizeof(double) * L.Dinv.size() + L.lines.memory_bytes() + L.inert.size();
-    for (auto& v : slot_) s += sizeof(std::int32_t) * v.size();
     for (auto& P : P_) s += P.memory_bytes();
     return s;
   }
@@ -72,7 +72,6 @@ class GalerkinHierarchy {
       gp_[l].build(Af, P_[l], l == nc - 1 ? mask : nullptr, lv_[l].A);
       lv_[l].scale = max_diagonal<d>(lv_[l].A);
       invert_diagonal<d>(lv_[l].A, lv_[l].Dinv, lv_[l].inert, lv_[l].scale);
-      if (slot_[l].size() != lv_[l].A.indices.size()) slot_[l].assign(lv_[l].A.indices.size(), -1);
       if (!lines_found_) lv_[l].lines = LineGaussSeidel<d>(find_lines<d>(lv_[l].A));
     }
     lines_found_ = true;
@@ -101,7 +100,7 @@ class GalerkinHierarchy {
     if (incremental_ >= kFullRebuildEvery) { rebuild(A, new_mask, new_hessian); return; }
     const auto t0 = std::chrono::steady_clock::now();
     const int top = nc - 1;
-    const BlockMatrix<d>& P = P_[top];
+    const Prolongation<d>& P = P_[top];
     for (const auto& [i, H] : old_hessian) add_fine_diagonal(i, -H, old_mask);
     for (Index i = 0; i < A.rows; ++i)
       for (int a = 0; a < d; ++a) {
@@ -109,7 +108,7 @@ class GalerkinHierarchy {
         if (old_mask[k] == new_mask[k]) continue;
         const double delta = new_mask[k] ? 1.0 : -1.0;
         for (Index b = P.indptr[i]; b < P.indptr[i + 1]; ++b) {
-          const Vec<d> p = delta * P.block(b).row(a).transpose();
+          const Vec<d> p = delta * P.block(i, b).row(a).transpose();
           if (p.isZero(0.0)) continue;
           const Index I = P.indices[b];
           for (Index q = A.indptr[i]; q < A.indptr[i + 1]; ++q) {
@@ -118,8 +117,9 @@ class GalerkinHierarchy {
             for (int c = 0; c < d; ++c) { vn[c] *= new_mask[j * d + c]; vo[c] *= old_mask[j * d + c]; }
             for (Index b2 = P.indptr[j]; b2 < P.indptr[j + 1]; ++b2) {
               const Index J = P.indices[b2];
-              add_delta(top, I, J, p * (vn * P.block(b2)));
-              add_delta(top, J, I, (p * (vo * P.block(b2))).transpose());
+              const Mat<d> Pj = P.block(j, b2);
+              add_delta(top, I, J, p * (vn * Pj));
+              add_delta(top, J, I, (p * (vo * Pj)).transpose());
             }
           }
         }
@@ -141,26 +141,22 @@ class GalerkinHierarchy {
 
   void add_delta(int l, Index I, Index J, const Mat<d>& M) {
     const Index pos = lv_[l].A.find(I, J);
-    std::int32_t& s = slot_[l][pos];
-    if (s < 0) {
-      s = (std::int32_t)delta_[l].size();
-      delta_[l].push_back({pos, I, J, M});
-    } else {
-      delta_[l][s].M += M;
-    }
+    const auto [it, fresh] = slot_[l].try_emplace(pos, (std::int32_t)delta_[l].size());
+    if (fresh) delta_[l].push_back({pos, I, J, M});
+    else delta_[l][it->second].M += M;
   }
 
   // top coarse level += P~_i^T H P~_i for a block H on the diagonal of fine node i
   void add_fine_diagonal(Index i, const Mat<d>& H, const std::uint8_t* mask) {
     const int top = (int)lv_.size() - 1;
-    const BlockMatrix<d>& P = P_[top];
+    const Prolongation<d>& P = P_[top];
     Mat<d> Hm = H;
     for (int a = 0; a < d; ++a)
       for (int b = 0; b < d; ++b) Hm(a, b) *= (mask ? mask[i * d + a] * mask[i * d + b] : 1);
     if (Hm.isZero(0.0)) return;
     for (Index b1 = P.indptr[i]; b1 < P.indptr[i + 1]; ++b1)
       for (Index b2 = P.indptr[i]; b2 < P.indptr[i + 1]; ++b2)
-        add_delta(top, P.indices[b1], P.indices[b2], P.block(b1).transpose() * Hm * P.block(b2));
+        add_delta(top, P.indices[b1], P.indices[b2], P.block(i, b1).transpose() * Hm * P.block(i, b2));
   }
 
   // Applies the pending changes level by level, each propagated to the next coarser level first.
@@ -168,16 +164,14 @@ class GalerkinHierarchy {
     for (int l = (int)lv_.size() - 1; l >= 0; --l) {
       Level& L = lv_[l];
       if (l > 0) {  // propagate before applying: the entries of delta_[l] are what changed on level l
-        const BlockMatrix<d>& Pl = P_[l - 1];
+        const Prolongation<d>& Pl = P_[l - 1];
         for (const auto& e : delta_[l])
           for (Index b = Pl.indptr[e.i]; b < Pl.indptr[e.i + 1]; ++b)
             for (Index b2 = Pl.indptr[e.j]; b2 < Pl.indptr[e.j + 1]; ++b2)
-              add_delta(l - 1, Pl.indices[b], Pl.indices[b2], Pl.block(b).transpose() * e.M * Pl.block(b2));
+              add_delta(l - 1, Pl.indices[b], Pl.indices[b2], Pl.block(e.i, b).transpose() * e.M * Pl.block(e.j, b2));
       }
-      for (const auto& e : delta_[l]) {
-        L.A.block(e.pos) += e.M;
-        slot_[l][e.pos] = -1;
-      }
+      for (const auto& e : delta_[l]) L.A.block(e.pos) += e.M;
+      slot_[l].clear();
       for (const auto& e : delta_[l]) invert_diagonal<d>(L.A, L.Dinv, L.inert, L.scale, e.i, e.i + 1);
       if (!delta_[l].empty()) factor_lines(l);
       delta_[l].clear();
@@ -234,11 +228,13 @@ class GalerkinHierarchy {
     return true;
   }
 
-  std::vector<BlockMatrix<d>> P_;
+  std::vector<Prolongation<d>> P_;
   std::vector<Level> lv_;
   std::vector<GalerkinProduct<d>> gp_;
   std::vector<std::vector<DeltaEntry>> delta_;  // pending incremental change of each level's A
-  std::vector<std::vector<std::int32_t>> slot_;  // position in A -> entry of delta_, or -1 (32 bits: 4 bytes a coarse block)
+  // position in A -> its entry of delta_: a map of the few touched blocks (a vector over every
+  // coarse block was 5 bytes a dof at level 9, issue 15)
+  std::vector<std::unordered_map<Index, std::int32_t>> slot_;
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt_;
   int rebuilds_ = 0, incremental_ = 0;
   bool lines_found_ = false;

@@ -60,7 +60,8 @@ class MonotoneMultigridStep {
     std::vector<double>& u = it_.u;
     const BlockMatrix<d>& A = P_.matrix();
     const std::vector<double>& f = P_.load();
-    old_ = u;
+    // on all threads: a plain vector copy was a serial pass over two fine vectors (issue 15)
+    parallel_for((Index)u.size(), [&](Index k) { old_[k] = u[k]; });
     for (int s = 0; s < opt_.nu1; ++s) Smoother::sweep(P_, u.data(), true, order_);
     pc.lap(Phase::PreSmooth);
     A.residual(u.data(), f.data(), r_.data());
@@ -82,16 +83,13 @@ class MonotoneMultigridStep {
       // a smooth change of the cycle map): only a change of the truncation restarts the history.
       // Without a sliding node no frozen bound enters the coarse problem: the plain cycle is left as it is.
       if (state_changed || !any_sliding()) anderson_.reset();
-      else anderson_.step(old_, u, [&](std::vector<double>& y) { return admit_mixed(y); });
+      else anderson_.step(old_, u, [&](std::vector<double>& y, const std::vector<double>& plain) { return admit_mixed(y, plain); });
     }
     // Au += A (u - u_old) and e = |u - u_old|_A^2 in one pass (were four: difference, product,
     // update, dot); sums over fixed chunks of rows, so the same on any thread count
     const double e = parallel_sum(A.rows, [&](Index i) {
       Vec<d> y = Vec<d>::Zero();
-      for (Index k = A.indptr[i]; k < A.indptr[i + 1]; ++k) {
-        const Index j = A.indices[k];
-        y.noalias() += A.block(k) * (CVecMap<d>(u.data() + d * j) - CVecMap<d>(old_.data() + d * j));
-      }
+      accumulate_block_differences<d>(A.values.data(), A.indices.data(), A.indptr[i], A.indptr[i + 1], u.data(), old_.data(), y.data());
       VecMap<d>(it_.Au.data() + d * i) += y;
       return (CVecMap<d>(u.data() + d * i) - CVecMap<d>(old_.data() + d * i)).dot(y);
     });
@@ -102,8 +100,8 @@ class MonotoneMultigridStep {
   // energy (with the Dirichlet offset and the friction term) and the contact counts
   void record(CycleRecord& rec) const {
     const std::vector<double>& u = it_.u, &Au = it_.Au, &f = P_.load();
-    double e = P_.energy_offset();
-    for (std::size_t k = 0; k < u.size(); ++k) e += 0.5 * u[k] * Au[k] - f[k] * u[k];
+    // over fixed chunks on all threads (was serial: three fine vectors read once a cycle)
+    double e = P_.energy_offset() + parallel_sum((Index)u.size(), [&](Index k) { return 0.5 * u[k] * Au[k] - f[k] * u[k]; });
     if constexpr (L::has_contact)
       for (Index c = 0; c < P_.num_contact(); ++c) {
         const Index k = P_.contact_node(c) * d;
@@ -168,10 +166,9 @@ class MonotoneMultigridStep {
   }
 
   // The mixed iterate y of the Anderson step takes the contact state of the plain cycle's result
-  // it_.u exactly (on the gap exactly g, sticking tangentials at their exact value), or is refused:
+  // u exactly (on the gap exactly g, sticking tangentials at their exact value), or is refused:
   // an inactive node it puts onto or past the obstacle, a sliding node it stops or turns.
-  bool admit_mixed(std::vector<double>& y) const {
-    const std::vector<double>& u = it_.u;
+  bool admit_mixed(std::vector<double>& y, const std::vector<double>& u) const {
     for (Index c = 0; c < P_.num_contact(); ++c) {
       const Index k = P_.contact_node(c) * d;
       const ContactNode p = P_.node(c);

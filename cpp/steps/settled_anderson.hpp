@@ -19,6 +19,7 @@
 // fixed point of one nonlinear sweep, whatever produced the iterate.
 #pragma once
 #include <Eigen/Dense>
+#include <algorithm>
 #include <deque>
 #include <vector>
 #include "parallel.hpp"
@@ -30,73 +31,153 @@ class SettledAnderson {
   static constexpr int kDepth = 3;  // cycles mixed (a fixed internal choice; 2-5 behave alike)
 
   void reset() {
-    dx_.clear();
-    dg_.clear();
-    have_last_ = false;
+    hist_.clear();
+    last_ = -1;
     accelerated_ = false;
   }
   std::size_t memory_bytes() const {
-    return sizeof(double) * (last_x_.capacity() + last_g_.capacity() + g_.capacity() + cand_.capacity() +
-                             (dx_.size() + dg_.size()) * last_x_.size());
+    std::size_t s = 0;
+    for (const Slot& q : slot_) s += sizeof(double) * (q.x.capacity() + q.g.capacity());
+    return s;
   }
   bool last_accelerated() const { return accelerated_; }
 
   // x: the iterate before the cycle; gx: the cycle's result G(x), overwritten with the mixed
-  // iterate when `admit(candidate)` accepts it (it may adjust the candidate). Returns whether it did.
+  // iterate when `admit(candidate, plain)` accepts it (it may adjust the candidate; plain is G(x)).
+  // Returns whether it did.
+  //
+  // Storage (issue 15): kDepth slots of two fine vectors, no more. A slot holds either a pair of
+  // the history (dx = x - x', dg = g - g', g = G(x) - x) or the last iterate (x', G(x')): the new
+  // pair is formed in place over the last iterate, and the next last iterate takes the slot of
+  // the oldest pair, which the next step would drop (the textbook layout held the history, x', g',
+  // g and a candidate: 10 fine vectors, 80 bytes a dof in 2D). Passes: one forms the new pair with
+  // every dot product of the least-squares problem (the Gram entries of older pairs are kept: the
+  // pairs do not change), one forms the candidate in gx and keeps G(x) as the next last iterate
+  // (were some 40 vector reads and writes a step, now 19). Every value is the one of the textbook
+  // layout bit for bit: g' = G(x') - x' is formed again from the same operands, and the sums run
+  // over the same chunks in the same order (parallel_sums).
   template <class Admit>
   bool step(const std::vector<double>& x, std::vector<double>& gx, Admit&& admit) {
     const Index n = (Index)x.size();
-    g_.resize(n);
-    parallel_for(n, [&](Index k) { g_[k] = gx[k] - x[k]; });
-    const double gnorm = parallel_sum(n, [&](Index k) { return g_[k] * g_[k]; });
-    if (have_last_ && accelerated_ && !(gnorm < last_gnorm_)) {  // the mixed step did not help: start over
-      reset();
-    }
-    if (have_last_) {
-      std::vector<double> dx, dg;
-      if ((int)dx_.size() == kDepth) {  // the oldest pair's storage takes the newest
-        dx.swap(dx_.front()); dg.swap(dg_.front());
-        dx_.pop_front(); dg_.pop_front();
+    double gnorm;
+    if (last_ >= 0) {
+      Slot& q = slot_[last_];
+      const int h = (int)hist_.size();  // older pairs, oldest first
+      const double* dg_old[kDepth] = {};
+      for (int i = 0; i < h; ++i) dg_old[i] = slot_[hist_[i]].g.data();
+      // sums: 0 |g|^2; 1..h+1 dg_i . g (oldest first, the new pair last); h+2..2h+2 dg_new . dg_j
+      const auto s = parallel_sums<2 * kDepth + 2>(n, 2 * h + 3, [&](Index k, double* acc) {
+        const double g = gx[k] - x[k], g_last = q.g[k] - q.x[k];
+        const double dx = x[k] - q.x[k], dg = g - g_last;
+        q.x[k] = dx;
+        q.g[k] = dg;
+        acc[0] += g * g;
+        for (int i = 0; i < h; ++i) acc[1 + i] += dg_old[i][k] * g;
+        acc[1 + h] += dg * g;
+        for (int j = 0; j < h; ++j) acc[2 + h + j] += dg * dg_old[j][k];
+        acc[2 + 2 * h] += dg * dg;
+      });
+      gnorm = s[0];
+      if (accelerated_ && !(gnorm < last_gnorm_)) {  // the mixed step did not help: start over
+        reset();
+        keep_last(x, gx, nullptr);
+      } else {
+        const int nw = last_;
+        for (int j = 0; j < h; ++j) gram_[nw][hist_[j]] = gram_[hist_[j]][nw] = s[2 + h + j];
+        gram_[nw][nw] = s[2 + 2 * h];
+        for (int i = 0; i <= h; ++i) rhs_[i] = s[1 + i];
+        hist_.push_back(nw);
+        last_ = -1;
       }
-      dx.resize(n); dg.resize(n);
-      parallel_for(n, [&](Index k) { dx[k] = x[k] - last_x_[k]; dg[k] = g_[k] - last_g_[k]; });
-      dx_.push_back(std::move(dx));
-      dg_.push_back(std::move(dg));
+    } else {
+      gnorm = 0;
+      keep_last(x, gx, &gnorm);
     }
-    last_x_ = x;
-    last_g_ = g_;
     last_gnorm_ = gnorm;
-    have_last_ = true;
     accelerated_ = false;
-    if (dx_.empty() || gnorm == 0) return false;
+    if (last_ >= 0) return false;  // no history, or it was just restarted: x, G(x) kept
+    if (gnorm == 0) { keep_last(x, gx, nullptr); return false; }
     // gamma = argmin |g - dG gamma| (normal equations of a <= kDepth column least-squares problem,
     // solved by a rank-revealing decomposition: nearly dependent columns get no weight)
-    const int m = (int)dg_.size();
+    const int m = (int)hist_.size();
     Eigen::MatrixXd M(m, m);
     Eigen::VectorXd rhs(m);
     for (int i = 0; i < m; ++i) {
-      rhs[i] = parallel_sum(n, [&](Index k) { return dg_[i][k] * g_[k]; });
-      for (int j = 0; j <= i; ++j) M(i, j) = M(j, i) = parallel_sum(n, [&](Index k) { return dg_[i][k] * dg_[j][k]; });
+      rhs[i] = rhs_[i];
+      for (int j = 0; j < m; ++j) M(i, j) = gram_[hist_[i]][hist_[j]];
     }
     const Eigen::VectorXd gamma = M.completeOrthogonalDecomposition().solve(rhs);
-    if (!gamma.allFinite()) return false;
-    cand_.assign(gx.begin(), gx.end());
+    if (!gamma.allFinite()) { keep_last(x, gx, nullptr); return false; }
+    // the candidate gx - sum_i gamma_i (dx_i + dg_i) in place; G(x) and x into the next last slot
+    // (the oldest pair's when the history is full: read before written, entry by entry)
+    const double* dx[kDepth] = {};
+    const double* dg[kDepth] = {};
+    for (int i = 0; i < m; ++i) { dx[i] = slot_[hist_[i]].x.data(); dg[i] = slot_[hist_[i]].g.data(); }
+    const int to = next_last_slot(n);  // may take the oldest pair's slot (and may grow slot_: pointers above stay)
+    Slot& q = slot_[to];
     parallel_for(n, [&](Index k) {
       double s = 0;
-      for (int i = 0; i < m; ++i) s += gamma[i] * (dx_[i][k] + dg_[i][k]);
-      cand_[k] -= s;
+      for (int i = 0; i < m; ++i) s += gamma[i] * (dx[i][k] + dg[i][k]);
+      q.x[k] = x[k];
+      q.g[k] = gx[k];
+      gx[k] -= s;
     });
-    if (!admit(cand_)) return false;
-    gx.swap(cand_);
+    last_ = to;
+    if (!admit(gx, static_cast<const std::vector<double>&>(q.g))) {
+      gx = q.g;
+      return false;
+    }
     accelerated_ = true;
     return true;
   }
 
  private:
-  std::deque<std::vector<double>> dx_, dg_;
-  std::vector<double> last_x_, last_g_, g_, cand_;
+  struct Slot {
+    std::vector<double> x, g;
+  };
+
+  // The slot for the next last iterate: a free one, or the oldest pair's when the history is
+  // full (the next step drops that pair anyway).
+  int next_last_slot(Index n) {
+    int to = -1;
+    if ((int)hist_.size() == kDepth) {
+      to = hist_.front();
+      hist_.pop_front();
+    } else {
+      for (int c = 0; c < kDepth && to < 0; ++c)
+        if (std::find(hist_.begin(), hist_.end(), c) == hist_.end()) to = c;
+    }
+    if ((int)slot_.size() <= to) slot_.resize(to + 1);
+    slot_[to].x.resize(n);
+    slot_[to].g.resize(n);
+    return to;
+  }
+
+  // x and G(x) kept as the last iterate (and |G(x) - x|^2 into *gnorm when asked)
+  void keep_last(const std::vector<double>& x, const std::vector<double>& gx, double* gnorm) {
+    const Index n = (Index)x.size();
+    const int to = next_last_slot(n);
+    Slot& q = slot_[to];
+    if (gnorm) {
+      *gnorm = parallel_sum(n, [&](Index k) {
+        q.x[k] = x[k];
+        q.g[k] = gx[k];
+        const double g = gx[k] - x[k];
+        return g * g;
+      });
+    } else {
+      parallel_for(n, [&](Index k) { q.x[k] = x[k]; q.g[k] = gx[k]; });
+    }
+    last_ = to;
+  }
+
+  std::vector<Slot> slot_;     // at most kDepth
+  std::deque<int> hist_;       // slots holding pairs (dx, dg), oldest first
+  int last_ = -1;              // slot holding (x', G(x')), or -1
+  double gram_[kDepth][kDepth] = {};  // dg_a . dg_b by slots
+  double rhs_[kDepth] = {};
   double last_gnorm_ = 0;
-  bool have_last_ = false, accelerated_ = false;
+  bool accelerated_ = false;
 };
 
 }  // namespace cmg

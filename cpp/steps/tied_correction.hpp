@@ -16,7 +16,7 @@ namespace cmg {
 template <int d>
 class TiedCorrection {
  public:
-  TiedCorrection(const ContactProblem<d>& P, std::vector<BlockMatrix<d>> prolongations)
+  TiedCorrection(const ContactProblem<d>& P, std::vector<Prolongation<d>> prolongations)
       : H_(std::move(prolongations)), C_(H_), mask_(P.base_mask()) {
     for (Index c = 0; c < P.num_contact(); ++c)
       for (int a = 0; a < d; ++a) mask_[P.contact_node(c) * d + a] = 0;
