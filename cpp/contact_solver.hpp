@@ -87,6 +87,7 @@ class ContactSolver {
       using Law = decltype(L);
       start(u0);
       P_.set_bounds_to_coefficients();
+      P_.set_smoothing_omega(cyc.omega);
       SolveResult R;
       {  // the step's vectors are freed before the result is written (the peak of a solve)
         MonotoneMultigridStep<d, Law> step(P_, H_, C_, built_, it_, cyc, fine_order(cyc.ordering), tied_.get());
@@ -107,6 +108,7 @@ class ContactSolver {
       using Law = decltype(L);
       start(u0);
       P_.set_bounds_to_coefficients();
+      P_.set_smoothing_omega(cyc.omega);
       SolveResult R;
       TnnmgStep<d, Law> step(P_, H_, C_, built_, it_, cyc, fine_cycle(), fine_order(cyc.ordering));
       run_loop(step, stored(opt), mon_, R, 0);
@@ -148,6 +150,7 @@ class ContactSolver {
   SolveResult solve_fixed_point(const double* u0, const SolveOptions& opt, const CycleOptions& cyc) {
     if (law_ != Law::Coulomb) throw InputError("the fixed-point iteration needs a Coulomb friction law");
     start(u0);
+    P_.set_smoothing_omega(cyc.omega);
     SolveResult R;
     MonotoneMultigridStep<d, law::Tresca> tresca(P_, H_, C_, built_, it_, cyc, fine_order(cyc.ordering), tied_.get());
     FixedPointStep<d> step(P_, tresca, it_);
@@ -163,6 +166,7 @@ class ContactSolver {
     return with_law(law_, [&](auto L) {
       start(u0);
       P_.set_bounds_to_coefficients();
+      P_.set_smoothing_omega(1.0);  // the independent check is the plain nonlinear sweep
       const SweepOrder& order = fine_order(ordering);
       for (int k = 0; k < sweeps; ++k) NonlinearGaussSeidel<d, decltype(L)>::sweep(P_, it_.u.data(), k % 2 == 0, order);
       std::vector<double> u = it_.u;

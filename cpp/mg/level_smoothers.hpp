@@ -76,11 +76,19 @@ inline Vec<d> local_rhs(const BlockMatrix<d>& A, const double* x, const double* 
   return s;
 }
 
+// x_i <- x_i + omega (y - x_i), y the exact block solve (omega = 1: y; CycleOptions::omega says why)
+template <int d>
+inline void relaxed_assign(VecMap<d>& xi, const Vec<d>& y, double omega) {
+  if (omega == 1.0) xi = y;
+  else xi += omega * (y - Vec<d>(xi));
+}
+
 template <int d>
 void block_gs_sweep(const BlockMatrix<d>& A, const std::vector<double>& Dinv, const double* b, double* x, bool forward,
-                    const SweepOrder& order = SweepOrder()) {
+                    const SweepOrder& order = SweepOrder(), double omega = 1.0) {
   order.visit(A.rows, forward, [&](Index i) {
-    VecMap<d>(x + d * i) = CMatMap<d>(Dinv.data() + i * d * d) * local_rhs<d>(A, x, b, i);
+    VecMap<d> xi(x + d * i);
+    relaxed_assign<d>(xi, CMatMap<d>(Dinv.data() + i * d * d) * local_rhs<d>(A, x, b, i), omega);
   });
 }
 
@@ -89,12 +97,12 @@ void block_gs_sweep(const BlockMatrix<d>& A, const std::vector<double>& Dinv, co
 template <int d>
 void projected_gs_sweep(const BlockMatrix<d>& A, const std::vector<double>& Dinv, const std::vector<std::uint8_t>& bounded,
                         const std::vector<std::uint8_t>& inert, const double* lo, const double* hi, const double* b, double* x, bool forward,
-                        const SweepOrder& order = SweepOrder()) {
+                        const SweepOrder& order = SweepOrder(), double omega = 1.0) {
   order.visit(A.rows, forward, [&](Index i) {
     const Vec<d> s = local_rhs<d>(A, x, b, i);
     VecMap<d> xi(x + d * i);
     if (!bounded[i]) {
-      xi = CMatMap<d>(Dinv.data() + i * d * d) * s;
+      relaxed_assign<d>(xi, CMatMap<d>(Dinv.data() + i * d * d) * s, omega);
       return;
     }
     const auto D = A.block(A.diag[i]);

@@ -286,3 +286,68 @@ def _refined(m: Mesh, r: dict, projector: Optional[Projector]) -> Tuple[Mesh, Tr
     _core.check_cells(points, r["cells"], m.cell_type)
     fine = Mesh._trusted(points, r["cells"], m.cell_type, r["facets"], r["facet_tags"])
     return fine, Transfer(fine.num_points, m.num_points, r["ptr"], r["parent"], r["weight"])
+
+
+def _node_cells(cells: np.ndarray, n: int) -> Tuple[np.ndarray, np.ndarray]:
+    """CSR of the cells around each node: cells ptr[i]:ptr[i+1] of `order` hold node i."""
+    flat = cells.ravel()
+    order = np.argsort(flat, kind="stable") // cells.shape[1]
+    ptr = np.zeros(n + 1, dtype=np.int64)
+    np.cumsum(np.bincount(flat, minlength=n), out=ptr[1:])
+    return ptr, order
+
+
+def boundary_interpolation(coarse: Mesh, fine_points: np.ndarray, t: Transfer, tol: float = 1e-12) -> Transfer:
+    """The transfer `t` with the rows of moved nodes (fine nodes not at the weighted mean of their
+    parents: new boundary nodes projected onto a curved boundary) replaced by the coarse P1
+    function evaluated at the node's actual position: its barycentric coordinates in the coarse
+    simplex that holds all its parents (of several, the one the point lies least outside of).
+    Why: with the refinement weights (1/2, 1/2) the prolongation of a linear field (a rigid
+    rotation, a constant strain) is not that field at a projected node, so the coarse spaces miss
+    exactly the smooth modes multigrid relies on them for; with barycentric weights P reproduces
+    every linear field on every level. A projected node lies outside its coarse cell on a convex
+    boundary: one weight is negative (about -h / (8 R)), so P is no averaging map there
+    (bound_restriction.hpp scales by the row's sum of |weights|, which covers it).
+    Not used by default: it was the suspected cause of the cycle growth on the Hertz hierarchies,
+    and measured it is not (linear rates the same to 0.005 in 2D and 3D, Algorithm 2 the same or up
+    to 4 cycles worse: the negative weights tighten the restricted obstacles; README, issue 11,
+    third part, benchmarks/cycle_growth.py). Kept for that comparison and for meshes whose
+    projection moves nodes by more than h^2 / (8 R)."""
+    if coarse.cell_type not in ("triangle", "tetra"):
+        raise ValueError(f"boundary interpolation is for simplices, got {coarse.cell_type}")
+    d = coarse.dim
+    P = t.matrix()
+    moved = np.flatnonzero(np.linalg.norm(fine_points - P @ coarse.points, axis=1) >
+                           tol * max(1.0, float(np.abs(coarse.points).max())))
+    if not len(moved):
+        return t
+    nptr, ncells = _node_cells(coarse.cells, coarse.num_points)
+    count = np.diff(t.ptr)
+    new_count = count.copy()
+    new_rows = {}
+    for i in moved:
+        sl = slice(t.ptr[i], t.ptr[i + 1])
+        par = t.parent[sl][t.weight[sl] != 0]
+        cand = ncells[nptr[par[0]]:nptr[par[0] + 1]]
+        cand = cand[[bool(np.all(np.isin(par, coarse.cells[c]))) for c in cand]]
+        if not len(cand):
+            raise ValueError(f"fine node {i}: no coarse cell holds all its parents {par.tolist()}")
+        X = coarse.points[coarse.cells[cand]]                      # (k, d+1, d)
+        J = np.transpose(X[:, 1:] - X[:, :1], (0, 2, 1))           # (k, d, d)
+        lam = np.linalg.solve(J, (fine_points[i] - X[:, 0])[:, :, None])[:, :, 0]
+        bary = np.concatenate([1 - lam.sum(axis=1, keepdims=True), lam], axis=1)
+        best = int(np.argmax(bary.min(axis=1)))
+        new_rows[int(i)] = (coarse.cells[cand[best]], bary[best])
+        new_count[i] = d + 1
+    ptr = np.zeros(t.n_fine + 1, dtype=np.int64)
+    np.cumsum(new_count, out=ptr[1:])
+    keep = np.ones(t.n_fine, dtype=bool)
+    keep[moved] = False
+    src = np.repeat(keep, count)
+    dst = np.repeat(keep, new_count)
+    parent = np.empty(ptr[-1], dtype=np.int64)
+    weight = np.empty(ptr[-1], dtype=float)
+    parent[dst], weight[dst] = t.parent[src], t.weight[src]
+    for i, (p, w) in new_rows.items():
+        parent[ptr[i]:ptr[i + 1]], weight[ptr[i]:ptr[i + 1]] = p, w
+    return Transfer(t.n_fine, t.n_coarse, ptr, parent, weight)

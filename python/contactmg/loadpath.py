@@ -20,8 +20,8 @@ from typing import Callable, List, Optional, Sequence
 
 import numpy as np
 
-from .problem import INT32_MAX, METHODS, SOLVE_TAKES_CYCLE_OPTIONS, ContactProblem, Dirichlet, assemble_load, \
-    dirichlet_arrays
+from .problem import INT32_MAX, METHODS, SOLVE_TAKES_CYCLE_OPTIONS, SOLVE_TAKES_OMEGA, ContactProblem, Dirichlet, \
+    assemble_load, dirichlet_arrays
 from .results import SLIP, STICK, ContactResult
 
 PATH_METHODS = ("nmg", "fixed-point")
@@ -143,6 +143,8 @@ class LoadPath:
         kw = dict(tol=float(tol), max_cycles=int(max_cycles), fixed_point=method == "fixed-point")
         if SOLVE_TAKES_CYCLE_OPTIONS:
             kw.update(cycle=options.cycle, nu1=options.nu1, nu2=options.nu2)
+        if SOLVE_TAKES_OMEGA:
+            kw["omega"] = p.smoothing_omega()
         t_path = time.perf_counter()
         steps: List[ContactResult] = []
         previous = self.initial

@@ -35,6 +35,17 @@ CORE_TAKES_MATRIX = "take_matrix" in (_core.ContactSolver2D.__init__.__doc__ or 
 # Issue 14: the linear correction of tnnmg per solve (PCG / one cycle / coarse levels only; line smoothing)
 SOLVE_TAKES_LINEAR = "linear (tnnmg)" in (_core.ContactSolver2D.solve.__doc__ or "")
 LINEAR_CORRECTIONS = ("pcg", "cycle", "coarse")
+# Issue 11: over-relaxation (omega) of the unbounded block solves of every Gauss-Seidel sweep per solve
+SOLVE_TAKES_OMEGA = "omega:" in (_core.ContactSolver2D.solve.__doc__ or "")
+# The default omega by cell type. Simplices: 1.3 (symmetric SOR). Nodal block Gauss-Seidel on P1
+# elasticity levels off near 0.34 per F(3,3) cycle on the adaptive Hertz levels (Q1: 0.14 on the
+# unit square); over-relaxed it contracts by 0.26 / 0.235 / 0.216 / 0.216 at level 11 with omega
+# 1.2 / 1.3 / 1.4 / 1.5 at the same cost per sweep, and Algorithm 2 at F = 0.4 needs 9-15 cycles over
+# levels 3-11 instead of 10-17 (README, issue 11, third part). 1.3 rather than 1.4: within 0.02 in
+# rate, and 1.4 costs one cycle on the small uniform level 3 at F = 0.4 (16 against 15). The
+# tetrahedral half ball gains too (level 3: 0.40 -> 0.32, 19 -> 16 cycles). Quadrilaterals gain nothing
+# (0.171 -> 0.157, 0.226 -> 0.225 at 1.4) and hexahedra lose (0.19 -> 0.25): plain Gauss-Seidel there.
+DEFAULT_OMEGA = {"triangle": 1.3, "tetra": 1.3}
 # Issue 15: a core solver built for the coloured order stores its levels by colours (each colour a
 # contiguous range: the coloured sweep streams memory). The default ordering of a problem's solves,
 # chosen by measurement (docs/scaling.md, benchmarks/parallel_bandwidth.py).
@@ -354,6 +365,16 @@ class ContactProblem:
     # Local smoothing (issue 11): None = on for adaptive hierarchies, off for uniform ones (there every
     # node of a level changes); True/False force it. Set before the first solve.
     local_smoothing: Optional[bool] = None
+    # Over-relaxation of the smoothers' unbounded block solves (CycleOptions::omega in the core):
+    # None = DEFAULT_OMEGA of the mesh's cell type (1 where it has none); a number in (0, 2) forces it.
+    smoother_omega: Optional[float] = None
+
+    def smoothing_omega(self) -> float:
+        """The over-relaxation the solves of this problem use (smoother_omega or the default)."""
+        w = self.smoother_omega
+        if w is None:
+            return float(DEFAULT_OMEGA.get(self.mesh.cell_type, 1.0))
+        return _checked_omega(w)
 
     def smooths_locally(self) -> bool:
         """Do the coarse levels smooth only where they differ from the level below?"""
@@ -408,7 +429,8 @@ class ContactProblem:
               nu1: Optional[int] = None, nu2: Optional[int] = None,
               progress: Optional[Callable[[dict], None]] = None, threads: int = 0,
               ordering: Optional[str] = None, fixed_point_stall_window: int = 0,
-              linear: Optional[str] = None, lines: Optional[bool] = None) -> ContactResult:
+              linear: Optional[str] = None, lines: Optional[bool] = None,
+              omega: Optional[float] = None) -> ContactResult:
         """Solve with `method`: "nmg" (Algorithm 2 for Coulomb; truncated monotone multigrid for
         frictionless and Tresca; linear multigrid without contact), "tnnmg" (truncated nonsmooth
         Newton multigrid: the fine nonlinear sweeps, one linear cycle for the truncated Newton
@@ -428,7 +450,9 @@ class ContactProblem:
         graph, the rows of one colour at once; the levels stored by colours) or "lexicographic" (one
         thread for the sweeps); None: `default_ordering` (DEFAULT_ORDERING). `fixed_point_stall_window` (Algorithm 1): stop as not converging once the relative
         change of s_n has not fallen below the one that many outer iterations before (0: run to
-        fixed_point_max); result.extra["outer_changes"] holds the change of every outer iteration."""
+        fixed_point_max); result.extra["outer_changes"] holds the change of every outer iteration.
+        `omega`: over-relaxation of the unbounded block solves of every sweep (fine nodes without
+        contact, coarse rows without bounds), in (0, 2); None: smoothing_omega()."""
         if method not in METHODS:
             raise ValueError(f"method must be one of {METHODS}, got {method!r}")
         options = self._options(cycle, nu1, nu2)
@@ -465,6 +489,11 @@ class ContactProblem:
             if not SOLVE_TAKES_FIXED_POINT_STALL:
                 raise ValueError("fixed_point_stall_window needs a core built with it (issue 11)")
             kw["fixed_point_stall_window"] = int(fixed_point_stall_window)
+        omega = self.smoothing_omega() if omega is None else _checked_omega(omega)
+        if SOLVE_TAKES_OMEGA:
+            kw["omega"] = omega
+        elif omega != 1.0:
+            raise ValueError("omega needs a core with over-relaxed sweeps (issue 11)")
         if SOLVE_TAKES_CYCLE_OPTIONS:
             kw.update(cycle=options.cycle, nu1=options.nu1, nu2=options.nu2, progress=progress)
         elif progress is not None:
@@ -488,7 +517,7 @@ class ContactProblem:
             return self._result(solver.solve(u0, **kw), method, options)
         if reference is None:
             reference = self.solve("nmg", tol=tol, rtol=rtol, max_cycles=max_cycles, cycle=options.cycle,
-                                   nu1=options.nu1, nu2=options.nu2, threads=threads, ordering=ordering)
+                                   nu1=options.nu1, nu2=options.nu2, threads=threads, ordering=ordering, omega=omega)
         t0 = time.perf_counter()
         solver = self._known_state_solver(reference, options)
         build = time.perf_counter() - t0
@@ -505,6 +534,7 @@ class ContactProblem:
         res = ContactResult.from_raw(self, raw, method)
         res.setup_seconds = self.assembly_seconds + self._build_seconds.get(self._solver_key(options), 0.0)
         res.extra["cycle_options"] = {"cycle": options.cycle, "nu1": options.nu1, "nu2": options.nu2}
+        res.extra["omega"] = float(raw.get("omega", 1.0))
         if method == "fixed-point" and "outer_changes" in raw:
             res.extra["outer_changes"] = [float(c) for c in raw["outer_changes"]]
         if "threads" in raw:
@@ -537,6 +567,12 @@ class ContactProblem:
         f = self.A.matvec(raw["u"]) - self.load
         cf = to_local(self.contact.frames, f[self.contact.nodes])
         return cf, ref.friction_bound.copy(), ref.node_state[self.contact.nodes].copy()
+
+
+def _checked_omega(w) -> float:
+    if isinstance(w, (bool, np.bool_)) or not (isinstance(w, numbers.Real) and 0 < w < 2):
+        raise ValueError(f"omega must be a number in (0, 2), got {w!r}")
+    return float(w)
 
 
 def _holds_rigid_motion(x: np.ndarray, fixed: np.ndarray) -> bool:
