@@ -8,8 +8,10 @@
 // cycles removes those few slow modes, as a Krylov method would on the affine map.
 //
 // What keeps it safe (no parameter a user sets; the depth is fixed here):
-//  - it mixes only cycles of one contact state with a sliding node (the caller resets the history
-//    when the truncation of the coarse problem changed or nothing slides);
+//  - it mixes cycles with a sliding node (the caller resets the history when nothing slides), of
+//    one contact state as long as the cycle makes progress: the caller restarts the history when
+//    the truncation changed, unless the plain cycle's step is no smaller (energy norm) than every
+//    step of the solve before (monotone_mg_step.hpp says why);
 //  - the mixed iterate is handed to `admit`, which must give it exactly the contact state of the
 //    plain cycle's result (or refuse it): active normals on the gap, sticking tangentials at their
 //    exact values, inactive nodes off the obstacle, sliding nodes sliding the same way;
@@ -43,8 +45,13 @@ class SettledAnderson {
 
   // x: the iterate before the cycle; gx: the cycle's result G(x), overwritten with the mixed
   // iterate when `admit(candidate)` accepts it (it may adjust the candidate). Returns whether it did.
+  // restart: forget the history first (the caller's contact state changed).
   template <class Admit>
-  bool step(const std::vector<double>& x, std::vector<double>& gx, Admit&& admit) {
+  bool step(const std::vector<double>& x, std::vector<double>& gx, Admit&& admit, bool restart = false) {
+    if (restart) {  // this cycle's pair spans two states: the history starts with the next one
+      reset();
+      return false;
+    }
     const Index n = (Index)x.size();
     g_.resize(n);
     parallel_for(n, [&](Index k) { g_[k] = gx[k] - x[k]; });
