@@ -8,8 +8,10 @@
 // cycles removes those few slow modes, as a Krylov method would on the affine map.
 //
 // What keeps it safe (no parameter a user sets; the depth is fixed here):
-//  - it mixes only cycles of one contact state with a sliding node (the caller resets the history
-//    when the truncation of the coarse problem changed or nothing slides);
+//  - it mixes cycles with a sliding node (the caller resets the history when nothing slides), of
+//    one contact state as long as the cycle makes progress: the caller restarts the history when
+//    the truncation changed, unless the plain cycle's step is no smaller (energy norm) than every
+//    step of the solve before (monotone_mg_step.hpp says why);
 //  - the mixed iterate is handed to `admit`, which must give it exactly the contact state of the
 //    plain cycle's result (or refuse it): active normals on the gap, sticking tangentials at their
 //    exact values, inactive nodes off the obstacle, sliding nodes sliding the same way;
@@ -44,7 +46,7 @@ class SettledAnderson {
 
   // x: the iterate before the cycle; gx: the cycle's result G(x), overwritten with the mixed
   // iterate when `admit(candidate, plain)` accepts it (it may adjust the candidate; plain is G(x)).
-  // Returns whether it did.
+  // Returns whether it did. restart: forget the history first (the caller's contact state changed).
   //
   // Storage (issue 15): kDepth slots of two fine vectors, no more. A slot holds either a pair of
   // the history (dx = x - x', dg = g - g', g = G(x) - x) or the last iterate (x', G(x')): the new
@@ -57,7 +59,11 @@ class SettledAnderson {
   // layout bit for bit: g' = G(x') - x' is formed again from the same operands, and the sums run
   // over the same chunks in the same order (parallel_sums).
   template <class Admit>
-  bool step(const std::vector<double>& x, std::vector<double>& gx, Admit&& admit) {
+  bool step(const std::vector<double>& x, std::vector<double>& gx, Admit&& admit, bool restart = false) {
+    if (restart) {  // this cycle's pair spans two states: the history starts with the next one
+      reset();
+      return false;
+    }
     const Index n = (Index)x.size();
     double gnorm;
     if (last_ >= 0) {
