@@ -15,16 +15,20 @@ namespace cmg {
 template <int d>
 inline void restrict_row_bounds(const Prolongation<d>& P, const std::uint8_t* mask, Index i, const double* lo_i, const double* hi_i,
                                 double* lo_c, double* hi_c) {
+  // entry (c, a) of block k of row i: w I on a plain row (read without forming the block: the
+  // coarse levels restrict their slack this way on every visit), R^T w on a rotated one
+  const bool rotated = P.rotated(i);
+  const auto entry = [&](Index k, int c, int a) { return rotated ? P.block(i, k)(c, a) : (a == c ? P.values[k] : 0.0); };
   for (int c = 0; c < d; ++c) {
     if ((mask && !mask[i * d + c]) || (lo_i[c] == -kInf && hi_i[c] == kInf)) continue;
     double sigma = 0;
     for (Index k = P.indptr[i]; k < P.indptr[i + 1]; ++k)
-      for (int a = 0; a < d; ++a) sigma += std::abs(P.block(i, k)(c, a));
+      for (int a = 0; a < d; ++a) sigma += std::abs(entry(k, c, a));
     const double scale = 1.0 / std::max(1.0, sigma);
     const double lo = lo_i[c] * scale, hi = hi_i[c] * scale;
     for (Index k = P.indptr[i]; k < P.indptr[i + 1]; ++k)
       for (int a = 0; a < d; ++a) {
-        const double w = P.block(i, k)(c, a);
+        const double w = entry(k, c, a);
         if (w == 0) continue;
         const Index g = P.indices[k] * d + a;
         if (w > 0) { hi_c[g] = std::min(hi_c[g], hi); lo_c[g] = std::max(lo_c[g], lo); }
