@@ -9,7 +9,9 @@ P1 assembly:
   scalar Laplacian and for elasticity, forward-only / symmetric sweeps, mesh vs lexicographic order;
 - vertex-star (overlapping patch) multiplicative Schwarz as the smoother, for comparison.
 
-    python benchmarks/tet_twogrid.py [--levels 2 5] [--cell tetra]
+    python benchmarks/tet_twogrid.py [--levels 2 5] [--checks] [--patch]
+
+Needs PyAMG (`pip install pyamg`), for this comparison only: it is not a dependency of the package.
 """
 import argparse
 import itertools
