@@ -9,7 +9,9 @@ P1 assembly:
   scalar Laplacian and for elasticity, forward-only / symmetric sweeps, mesh vs lexicographic order;
 - vertex-star (overlapping patch) multiplicative Schwarz as the smoother, for comparison.
 
-    python benchmarks/tet_twogrid.py [--levels 2 5] [--cell tetra]
+    python benchmarks/tet_twogrid.py [--levels 2 5] [--checks] [--patch]
+
+Needs PyAMG (`pip install pyamg`), for this comparison only: it is not a dependency of the package.
 """
 import argparse
 import itertools
@@ -209,6 +211,8 @@ def main():
                     c = Cycle(As[:L], Ps[:L - 1], b, n1, n2, symmetric_pre=sym)
                     tg = c.rate(two_grid=True, iters=20) if L <= 5 else float("nan")
                     row.append(f"V({n1},{n2}){'sym' if sym else ''} {c.rate():.3f} TG {tg:.3f}")
+                # F(3,3) with the fine level visiting its coarse level twice (the textbook F-cycle)
+                row.append(f"F(3,3) {Cycle(As[:L], Ps[:L - 1], b, 3, 3, kind='F').rate():.3f}")
                 if a.patch and L <= 4:
                     pats = [vertex_stars(abs(A[::b, ::b]) if b > 1 else A, b) for A in As[:L]]
                     c = Cycle(As[:L], Ps[:L - 1], b, 1, 1, smoother="patch", patches=pats)
