@@ -176,10 +176,7 @@ class MonotoneMultigridStep {
     const BlockMatrix<d>& A = P_.matrix();
     const double e = parallel_sum(A.rows, [&](Index i) {
       Vec<d> z = Vec<d>::Zero();
-      for (Index k = A.indptr[i]; k < A.indptr[i + 1]; ++k) {
-        const Index j = A.indices[k];
-        z.noalias() += A.block(k) * (CVecMap<d>(y.data() + d * j) - CVecMap<d>(x.data() + d * j));
-      }
+      accumulate_block_differences<d>(A.values.data(), A.indices.data(), A.indptr[i], A.indptr[i + 1], y.data(), x.data(), z.data());
       return (CVecMap<d>(y.data() + d * i) - CVecMap<d>(x.data() + d * i)).dot(z);
     });
     return std::sqrt(std::max(e, 0.0));
