@@ -362,6 +362,14 @@ class ContactProblem:
         A, self._A = self.A, None
         return cls(A, *args, take_matrix=True, **kw)
 
+    # Issue 15: once the kept core solver is built (it holds its own prolongations and fine matrix),
+    # release the hierarchy's coarse meshes and its transfers (MeshHierarchy.release_coarse: the
+    # finest mesh stays for results and output; the others are made again, bit for bit, if anything
+    # asks for them). Off by default: a hierarchy shared by several problems, or a load path that
+    # builds a core solver per step, would make them again and again. The single solves of the
+    # command line turn it on.
+    release_hierarchy: bool = False
+
     # Local smoothing (issue 11): None = on for adaptive hierarchies, off for uniform ones (there every
     # node of a level changes); True/False force it. Set before the first solve.
     local_smoothing: Optional[bool] = None
@@ -405,7 +413,25 @@ class ContactProblem:
             self._solvers[key] = self._new_core_solver(self.law, key, take_matrix=True)
             self._apply_local_smoothing(self._solvers[key])
             self._build_seconds[key] = time.perf_counter() - t0
+            if self.release_hierarchy:
+                self.hierarchy.release_coarse()
         return self._solvers[key]
+
+    def memory_bytes(self) -> Dict[str, int]:
+        """Bytes held now, by owner: the hierarchy's meshes and transfers (Python), the problem's
+        vectors (load, Dirichlet data, contact boundary, coefficients), an assembled matrix held in
+        Python, and the kept core solvers (each one's own count: matrices, prolongations, vectors);
+        "total" is their sum. Nothing is made again to count it (a released hierarchy stays so)."""
+        h = self.hierarchy.memory_bytes()
+        c = self.contact
+        arrays = (self.load, self.fixed, self.fixed_values, self.coefficients, c.nodes, c.normals, c.gaps, c.measure,
+                  c.frames, c.facets)
+        out = {"mesh_hierarchy": h["meshes"], "transfers": h["transfers"],
+               "problem_vectors": int(sum(a.nbytes for a in arrays if isinstance(a, np.ndarray))),
+               "python_matrix": self._A.memory_bytes() if self._A is not None else 0,
+               "core": int(sum(S.memory_bytes() for S in self._solvers.values()))}
+        out["total"] = sum(out.values())
+        return out
 
     def _solver_key(self, options: CycleOptions) -> CycleOptions:
         # a core that takes the cycle per solve serves every choice with the solver of the defaults
