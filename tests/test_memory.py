@@ -52,6 +52,7 @@ def test_results_output_and_check_need_nothing_released(tmp_path):
     r = p.solve("nmg")
     assert p.hierarchy.released
     levels = p.hierarchy.levels
+    assert p.memory_bytes()["problem_vectors"] < p.mesh.num_points * p.mesh.dim * 8  # load and Dirichlet values dropped
     path = tmp_path / "out.vtu"
     r.write_vtu(path)
     c = contact_conditions(p, r)
@@ -64,6 +65,9 @@ def test_results_output_and_check_need_nothing_released(tmp_path):
     assert np.array_equal(back.cells_dict["triangle"], p.mesh.cells)
     assert counts["contact_nodes"] > 0 and width > 0 and reaction[1] > 0
     assert c["max"] < VIOLATION_TOL
+    # the check made the load and the Dirichlet values again: the same bits as a fresh problem's
+    fresh = hertz_problem("triangle", 5, 0.4)
+    assert np.array_equal(p.load, fresh.load) and np.array_equal(p.fixed_values, fresh.fixed_values)
     # a second solve runs on the kept core solver: still released
     again = p.solve("nmg", threads=1)
     assert p.hierarchy.released and again.converged
@@ -104,8 +108,10 @@ def test_memory_accounting_adds_up():
     after = p.memory_bytes()
     for m in (before, after):
         assert m["total"] == sum(v for k, v in m.items() if k != "total")
-    # the core took the matrix over, the coarse meshes and the transfers are gone, the finest mesh stays
+    # the core took the matrix over, the coarse meshes, the transfers, the load and the Dirichlet
+    # values are gone, the finest mesh stays
     assert after["python_matrix"] == 0 and after["transfers"] == 0 and after["core"] == p.solver.memory_bytes()
+    assert before["problem_vectors"] - after["problem_vectors"] == 2 * 8 * p.mesh.num_points * p.mesh.dim
     fine = p.mesh
     assert after["mesh_hierarchy"] == sum(a.nbytes for a in (fine.points, fine.cells, fine.facets, fine.facet_tags))
     assert after["mesh_hierarchy"] < before["mesh_hierarchy"]
