@@ -14,8 +14,11 @@ a sweep, the bytes of a whole cycle (cycle_bytes: every sweep, product, restrict
 prolongation on every level) over the time of a cycle, and the core's stream triad a = b + 1.5 c
 on 1 and 2 threads (and numpy's) measured in the same run, before and after. Ends with the whole
 table in markdown.
-memory: peak resident memory of a Hertz solve (the CLI's path) in a fresh process and what each
-owner holds after the solve.
+memory: peak resident memory of a Hertz solve (--dim 3: the sphere, --cell tetra or hexahedron) in a
+fresh process: the CLI itself, then a worker on the CLI's path (the problem releases its Python
+hierarchy and vectors once the core solver is built, as the CLI's single solves do) that reports what
+each owner holds after the solve (ContactProblem.memory_bytes, the core's counters) and the resident
+and peak memory after each stage. benchmarks/memory_timeline.py finds the moment of the peak.
 """
 from __future__ import annotations
 

@@ -143,3 +143,21 @@ def test_the_command_line_releases_for_a_single_solve(tmp_path, monkeypatch):
     # a load path builds a core solver per step: it keeps its hierarchy
     assert cli.main(["hertz", "--levels", "3", "--steps", "2", "--json", str(out), "-q"]) == 0
     assert not made[-1].hierarchy.released
+
+
+def test_hierarchies_pickle_and_old_pickles_load():
+    import pickle
+
+    from contactmg.hierarchy import MeshHierarchy
+
+    p = released(lambda: hertz_problem("triangle", 3, 0.4))
+    p.solver
+    h = pickle.loads(pickle.dumps(p.hierarchy))
+    assert h.released and h.levels == 3
+    assert np.array_equal(h.meshes[1].cells, hertz_problem("triangle", 3, 0.4).hierarchy.meshes[1].cells)
+    # the state of the former dataclass (public meshes / transfers)
+    old = MeshHierarchy.__new__(MeshHierarchy)
+    k = hertz_problem("triangle", 3, 0.4).hierarchy
+    old.__setstate__({"meshes": k.meshes, "transfers": k.transfers, "build_seconds": 1.0, "kind": "uniform",
+                      "estimated_error": []})
+    assert old.levels == 3 and old.finest is k.finest and not old.released and not old.can_release()

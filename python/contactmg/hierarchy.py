@@ -114,6 +114,14 @@ class MeshHierarchy:
         self._finest: Optional[Mesh] = None  # the finest mesh while the others are released
         self._levels = 0
 
+    def __setstate__(self, state: dict) -> None:
+        # a hierarchy pickled when this was a dataclass (benchmarks/cycle_growth.py caches one)
+        if "meshes" in state:
+            state["_meshes"], state["_transfers"] = state.pop("meshes"), state.pop("transfers")
+        for key, default in (("_recipe", None), ("_finest", None), ("_levels", 0), ("bisection_marks", None)):
+            state.setdefault(key, default)
+        self.__dict__.update(state)
+
     def __repr__(self) -> str:
         state = ", coarse levels released" if self.released else ""
         return f"MeshHierarchy({self.kind}, {self.levels} levels, {self.finest.num_points} fine nodes{state})"
