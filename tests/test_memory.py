@@ -161,3 +161,20 @@ def test_hierarchies_pickle_and_old_pickles_load():
     old.__setstate__({"meshes": k.meshes, "transfers": k.transfers, "build_seconds": 1.0, "kind": "uniform",
                       "estimated_error": []})
     assert old.levels == 3 and old.finest is k.finest and not old.released and not old.can_release()
+
+
+@pytest.mark.parametrize("make", [lambda: hertz_problem("triangle", 4, 0.4), lambda: hertz_problem("quad", 3, 0.4),
+                                  lambda: sphere_problem("tetra", 2, 0.4), lambda: sphere_problem("hexahedron", 2, 0.4)])
+def test_the_stiffness_pattern_is_every_pair_of_nodes_sharing_a_cell(make):
+    # the core builds it row by row from the cells around each node (no list of every cell's k^2 pairs)
+    p = make()
+    m = p.mesh
+    k = m.cells.shape[1]
+    cells = m.cells.astype(np.int64)
+    i, j = np.repeat(cells, k, axis=1).ravel(), np.tile(cells, (1, k)).ravel()
+    key = np.unique(i * m.num_points + j)
+    rows, cols = key // m.num_points, key % m.num_points
+    A = p.A
+    indptr, indices = np.asarray(A.indptr), np.asarray(A.indices)
+    assert np.array_equal(indptr, np.r_[0, np.cumsum(np.bincount(rows, minlength=m.num_points))])
+    assert np.array_equal(indices, cols)
