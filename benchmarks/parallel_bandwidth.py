@@ -3,7 +3,7 @@ two orders, and the memory per dof by owner.
 
     python benchmarks/parallel_bandwidth.py time   [--levels 8 9] [--levels3d 4] [--repeats 3] [--json out.json]
     python benchmarks/parallel_bandwidth.py counts [--levels 3 4 5 6 7 8 9] [--json out.json]
-    python benchmarks/parallel_bandwidth.py memory --level 9 [--dim 2|3] [--json out.json]
+    python benchmarks/parallel_bandwidth.py memory --level 9 [--dim 2|3] [--cell C] [--json out.json]
 
 time: seconds per cycle for lexicographic (1, 2 threads), coloured in the user's order (1 thread:
 issue 15 before renumbering) and coloured stored by colours (1, 2 threads), the runs of one level
@@ -14,8 +14,11 @@ a sweep, the bytes of a whole cycle (cycle_bytes: every sweep, product, restrict
 prolongation on every level) over the time of a cycle, and the core's stream triad a = b + 1.5 c
 on 1 and 2 threads (and numpy's) measured in the same run, before and after. Ends with the whole
 table in markdown.
-memory: peak resident memory of a Hertz solve (the CLI's path) in a fresh process and what each
-owner holds after the solve.
+memory: peak resident memory of a Hertz solve (--dim 3: the sphere, --cell tetra or hexahedron) in a
+fresh process: the CLI itself, then a worker on the CLI's path (the problem releases its Python
+hierarchy and vectors once the core solver is built, as the CLI's single solves do) that reports what
+each owner holds after the solve (ContactProblem.memory_bytes, the core's counters) and the resident
+and peak memory after each stage. benchmarks/memory_timeline.py finds the moment of the peak.
 """
 from __future__ import annotations
 
@@ -228,14 +231,15 @@ def status(key):  # VmRSS (now) or VmHWM (peak so far) in bytes
 stages = {}
 def stage(name):
     stages[name] = {"rss": status("VmRSS"), "peak": status("VmHWM")}
-dim, level = int(sys.argv[1]), int(sys.argv[2])
+dim, level, cell = int(sys.argv[1]), int(sys.argv[2]), sys.argv[3]
 stage("imports")
 if dim == 2:
     from contactmg.hertz import hertz_problem
-    p = hertz_problem("triangle", level, 0.4)
+    p = hertz_problem(cell, level, 0.4)
 else:
     from contactmg.sphere import sphere_problem
-    p = sphere_problem(levels=level, friction=0.4)
+    p = sphere_problem(cell, levels=level, friction=0.4)
+p.release_hierarchy = True  # as the command line's single solves (cli.release_after_build)
 stage("problem")
 p.solver
 stage("core solver")
@@ -245,27 +249,25 @@ peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
 d, n = p.mesh.dim, p.mesh.num_points
 S = p.solver
 nb = lambda *arrs: int(sum(a.nbytes for a in arrs if isinstance(a, np.ndarray)))
-meshes = sum(nb(m.points, m.cells, m.facets, m.facet_tags) for m in p.hierarchy.meshes)
-transfers = sum(nb(*t.as_tuple()[2:]) for t in p.hierarchy.transfers)
+own = p.memory_bytes()  # by owner, nothing made again (a released hierarchy stays released)
 fine = S.fine_matrix().memory_bytes()
 coarse = sum(S.coarse_matrix(l).memory_bytes() for l in range(S.num_levels - 1))
 core = S.memory_bytes()
 results = nb(r.displacement, r.contact_force, r.friction_bound, r.node_state) + sum(v.nbytes for v in r.history.values())
-python_A = p._A.memory_bytes() if getattr(p, "_A", None) is not None else 0
-problem_vectors = nb(p.load, p.fixed, p.fixed_values, p.contact.nodes, p.contact.normals, p.contact.gaps, p.coefficients)
-print(json.dumps(dict(dim=dim, level=level, dofs=d * n, cycles=r.cycles, converged=r.converged, peak_rss_bytes=peak,
+print(json.dumps(dict(dim=dim, level=level, cell=cell, dofs=d * n, cycles=r.cycles, converged=r.converged, peak_rss_bytes=peak,
                       peak_bytes_per_dof=peak / (d * n), fine_matrix=fine, coarse_matrices=coarse,
-                      core_total=core, core_transfers_vectors_dinv=core - fine - coarse, python_matrix_copy=python_A,
-                      mesh_hierarchy_python=meshes, transfers_python=transfers, problem_vectors_python=problem_vectors,
+                      core_total=core, core_transfers_vectors_dinv=core - fine - coarse, python_matrix_copy=own["python_matrix"],
+                      mesh_hierarchy_python=own["mesh_hierarchy"], transfers_python=own["transfers"],
+                      problem_vectors_python=own["problem_vectors"], hierarchy_released=p.hierarchy.released,
                       results=results, stages=stages)))
 '''
 
 
-def cli_peak_rss(dim: int, level: int) -> int:
-    """Peak resident bytes of the CLI solve itself (`contactmg hertz --levels L` / `sphere --cell hexahedron`)
+def cli_peak_rss(dim: int, level: int, cell: str) -> int:
+    """Peak resident bytes of the CLI solve itself (`contactmg hertz --levels L` / `sphere --cell C`)
     in a fresh process."""
-    cmd = [sys.executable, "-m", "contactmg"] + (["hertz", "--levels", str(level)] if dim == 2 else
-                                                 ["sphere", "--cell", "hexahedron", "--levels", str(level)]) + ["--json", "-", "-q"]
+    cmd = [sys.executable, "-m", "contactmg"] + (["hertz", "--cell", cell, "--levels", str(level), "--friction", "0.4"] if dim == 2 else
+                                                 ["sphere", "--cell", cell, "--levels", str(level)]) + ["--json", "-", "-q"]
     before = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
     out = subprocess.run(cmd, capture_output=True, text=True)
     if out.returncode != 0:
@@ -276,8 +278,10 @@ def cli_peak_rss(dim: int, level: int) -> int:
 
 
 def cmd_memory(args):
-    cli = cli_peak_rss(args.dim, args.level)
-    out = subprocess.run([sys.executable, "-c", MEMORY_WORKER, str(args.dim), str(args.level)], capture_output=True, text=True)
+    cell = args.cell or ("triangle" if args.dim == 2 else "hexahedron")
+    cli = cli_peak_rss(args.dim, args.level, cell)
+    out = subprocess.run([sys.executable, "-c", MEMORY_WORKER, str(args.dim), str(args.level), cell], capture_output=True,
+                         text=True)
     if out.returncode != 0:
         raise SystemExit(out.stderr)
     res = json.loads(out.stdout.strip().splitlines()[-1])
@@ -285,7 +289,7 @@ def cmd_memory(args):
     res["cli_peak_bytes_per_dof"] = cli / res["dofs"]
     dofs = res["dofs"]
     for k, v in res.items():
-        if isinstance(v, int) and k not in ("dim", "level", "dofs", "cycles"):
+        if isinstance(v, int) and not isinstance(v, bool) and k not in ("dim", "level", "dofs", "cycles"):
             print(f"{k:32s} {v / 2**20:9.1f} MiB {v / dofs:7.1f} B/dof")
     for name, st in res["stages"].items():
         print(f"after {name:24s} rss {st['rss'] / 2**20:9.1f} MiB  peak so far {st['peak'] / 2**20:9.1f} MiB "
@@ -306,6 +310,7 @@ def main():
     m = sub.add_parser("memory")
     m.add_argument("--level", type=int, default=9)
     m.add_argument("--dim", type=int, default=2)
+    m.add_argument("--cell", default=None, help="triangle (2D default), quad; hexahedron (3D default), tetra")
     for s in (t, c, m):
         s.add_argument("--json")
     args = ap.parse_args()

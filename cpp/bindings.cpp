@@ -256,7 +256,7 @@ void bind_dim(py::module_& m) {
              // take_matrix: the caller gives its matrix up (left empty), so the fine matrix is held once
              BM fine = take_matrix ? std::exchange(A, BM()) : BM(A);
              return new CS(std::move(fine), f.data(), fixed.data(), fixed_values.data(), cn, normals.data(), gaps.data(), coefficients.data(),
-                           parse_law(law), T, co, frame_fixed.is_none() ? nullptr : ff.data(),
+                           parse_law(law), std::move(T), co, frame_fixed.is_none() ? nullptr : ff.data(),
                            frame_fixed.is_none() ? nullptr : fv.data(), co.ordering == Ordering::Coloured);
            }),
            py::arg("A"), py::arg("load"), py::arg("fixed"), py::arg("fixed_values"), py::arg("contact_nodes"),

@@ -25,9 +25,9 @@ class ContactSolver {
   // out stays in the caller's numbering.
   ContactSolver(BlockMatrix<d> A, const double* f, const std::uint8_t* fixed, const double* fixed_values,
                 const std::vector<Index>& contact_nodes, const double* normals, const double* gaps, const double* coefficients,
-                Law law, const std::vector<Transfer>& transfers, CycleOptions cyc, const std::uint8_t* frame_fixed = nullptr,
+                Law law, std::vector<Transfer> transfers, CycleOptions cyc, const std::uint8_t* frame_fixed = nullptr,
                 const double* frame_values = nullptr, bool renumber = false)
-      : ContactSolver(Stored(std::move(A), f, fixed, fixed_values, contact_nodes, transfers, renumber), normals, gaps,
+      : ContactSolver(Stored(std::move(A), f, fixed, fixed_values, contact_nodes, std::move(transfers), renumber), normals, gaps,
                       coefficients, law, cyc, frame_fixed, frame_values) {}
 
   Index num_nodes() const { return P_.num_nodes(); }
@@ -187,7 +187,7 @@ class ContactSolver {
     std::vector<Renumbering> order;  // per level, coarsest first; the fine one last
 
     Stored(BlockMatrix<d> A_in, const double* f_in, const std::uint8_t* fixed_in, const double* values_in,
-           const std::vector<Index>& nodes, const std::vector<Transfer>& T, bool renumber)
+           const std::vector<Index>& nodes, std::vector<Transfer> T, bool renumber)
         : A(std::move(A_in)) {
       const Index n = A.rows;
       for (std::size_t l = 0; l < T.size(); ++l) {
@@ -196,6 +196,12 @@ class ContactSolver {
         if (fine && T[l].n_fine != n) throw InputError("the finest prolongation does not match the matrix size");
         if ((Index)T[l].ptr.size() != T[l].n_fine + 1) throw InputError("prolongation pointer array has the wrong length");
         P.push_back(make_prolongation<d>(T[l].n_fine, T[l].n_coarse, T[l].ptr.data(), T[l].parent.data(), T[l].weight.data()));
+        // the interpolation weights are in P now: freed at once, not at the end of the build (their
+        // 64-bit copies were 24 bytes a dof at level 9 in 2D during the renumbering and the
+        // Galerkin products, the peak of the build; issue 15)
+        std::vector<Index>().swap(T[l].ptr);
+        std::vector<Index>().swap(T[l].parent);
+        std::vector<double>().swap(T[l].weight);
       }
       order.resize(P.size() + 1);
       if (renumber) {

@@ -107,6 +107,16 @@ def use_ordering(problem, args) -> None:
         problem.default_ordering = args.ordering
 
 
+def release_after_build(problem, args) -> None:
+    """A single solve (not a load path, which builds a core solver per step, nor --method linear,
+    whose second solver needs the transfers again) lets the problem drop the Python copies of the
+    coarse meshes and the transfers once its core solver holds its own (issue 15)."""
+    from . import cli_path
+
+    if not cli_path.wanted(args) and args.method != "linear":
+        problem.release_hierarchy = True
+
+
 def write_boundary_stress_plot(result, friction: float, path: str) -> None:
     """Figure 2 (middle) of a 2D result: boundary stresses with the stick and slip zones."""
     import matplotlib
@@ -231,6 +241,7 @@ def run_hertz(args) -> int:
     problem = hertz_problem(args.cell, args.levels, args.friction, coulomb_at_zero=args.method == "fixed-point",
                             cycle=args.cycle, nu1=args.nu1, nu2=args.nu2, hierarchy=args.hierarchy)
     use_ordering(problem, args)
+    release_after_build(problem, args)
     if cli_path.wanted(args):
         from .generators import HERTZ_TOP
         from .hertz import TOP_DISPLACEMENT

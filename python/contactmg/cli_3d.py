@@ -107,6 +107,7 @@ def run_sphere(args) -> int:
                                         coulomb_at_zero=args.method == "fixed-point", cycle=args.cycle, nu1=args.nu1,
                                         nu2=args.nu2, hierarchy=args.hierarchy)
         cli.use_ordering(problem, args)
+        cli.release_after_build(problem, args)
     except RuntimeError as e:  # a solve of the adaptive refinement did not converge: no result to report
         print(f"contactmg sphere: {e}", file=sys.stderr)
         return cli.EXIT_NO_CONVERGENCE
@@ -161,6 +162,7 @@ def run_cork(args) -> int:
     problem = cork.cork_problem(args.levels, args.friction, args.push, coulomb_at_zero=args.method == "fixed-point",
                                 cycle=args.cycle, nu1=args.nu1, nu2=args.nu2)
     cli.use_ordering(problem, args)
+    cli.release_after_build(problem, args)
     path = None
     if cli_path.wanted(args):
         path = cli_path.solve(args, problem, [CORK_TOP], (0.0, 0.0, -args.push), (0.0, 0.0, args.push),

@@ -19,7 +19,8 @@ from .hierarchy import MeshHierarchy
 from .material import Material
 from .mesh import Mesh
 from .problem import Dirichlet
-from .two_body import Body, ContactPair, TwoBodyProblem
+# two_body (scipy.sparse, the mortar modules) is imported where a problem is built: the command line
+# builds this module's parser for every command, and scipy cost a `contactmg hertz` process 32 MiB (issue 15)
 
 E, NU, RADIUS = 2000.0, 0.28, 0.4
 FACE_DISPLACEMENT = 0.005
@@ -45,6 +46,8 @@ def cylinders_problem(levels: int = 5, friction: float = 0.0, E2: float = E, nu2
                       tied_correction: bool = True) -> TwoBodyProblem:
     if isinstance(friction, bool) or not isinstance(friction, (int, float)) or not math.isfinite(friction) or friction < 0:
         raise ValueError(f"the friction coefficient must be a finite number >= 0, got {friction!r}")
+    from .two_body import Body, ContactPair, TwoBodyProblem
+
     upper = MeshHierarchy.build(polar_half_disk((0.0, 0.4), RADIUS, rings=3, segments=upper_segments), levels,
                                 projector=hertz_projector((0.0, 0.4), RADIUS))
     lower = MeshHierarchy.build(lower_half_disk(lower_segments), levels, projector=hertz_projector((0.0, -0.4), RADIUS))

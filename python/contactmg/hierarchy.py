@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import os
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Callable, List, Optional, Tuple
 
 import numpy as np
@@ -87,28 +87,116 @@ def estimate_memory_bytes(mesh: Mesh, levels: int) -> int:
     return estimate_nodes(mesh, levels) * _BYTES_PER_NODE[mesh.dim]
 
 
-@dataclass
 class MeshHierarchy:
-    """Meshes from coarse (index 0) to fine and the transfers between consecutive levels."""
+    """Meshes from coarse (index 0) to fine and the transfers between consecutive levels.
 
-    meshes: List[Mesh]
-    transfers: List[Transfer] = field(default_factory=list)
-    build_seconds: float = 0.0
-    kind: str = "uniform"
-    # adaptive hierarchies: the estimated error (hierarchical estimator, energy norm) of the solution
-    # on each level, coarse to fine
-    estimated_error: List[float] = field(default_factory=list)
-    # adaptive tetrahedral hierarchies: the bisection state of the finest mesh's cells (the marks of
-    # _core.bisect), so that a further level continues the same bisection tree
-    bisection_marks: Optional[np.ndarray] = None
+    A hierarchy made by `build` can give up its coarse meshes and all its transfers
+    (release_coarse) once a core solver holds its own copies of what it needs: the finest mesh
+    stays (results and output need it), and `meshes` / `transfers` are made again from the coarse
+    mesh, the same refinement and projection (bit for bit) the next time they are asked for. At
+    level 9 in 2D they were 66 bytes a dof of a solve's peak (issue 15)."""
+
+    def __init__(self, meshes: List[Mesh], transfers: Optional[List[Transfer]] = None, build_seconds: float = 0.0,
+                 kind: str = "uniform", estimated_error: Optional[List[float]] = None,
+                 bisection_marks: Optional[np.ndarray] = None):
+        self._meshes: Optional[List[Mesh]] = meshes
+        self._transfers: Optional[List[Transfer]] = [] if transfers is None else transfers
+        self.build_seconds = build_seconds
+        self.kind = kind
+        # adaptive hierarchies: the estimated error (hierarchical estimator, energy norm) of the solution
+        # on each level, coarse to fine
+        self.estimated_error: List[float] = [] if estimated_error is None else estimated_error
+        # adaptive tetrahedral hierarchies: the bisection state of the finest mesh's cells (the marks of
+        # _core.bisect), so that a further level continues the same bisection tree
+        self.bisection_marks = bisection_marks
+        # build(): (coarse mesh, projector) to make the levels again after release_coarse
+        self._recipe: Optional[Tuple[Mesh, Optional[Projector]]] = None
+        self._finest: Optional[Mesh] = None  # the finest mesh while the others are released
+        self._levels = 0
+
+    def __setstate__(self, state: dict) -> None:
+        # a hierarchy pickled when this was a dataclass (benchmarks/cycle_growth.py caches one)
+        if "meshes" in state:
+            state["_meshes"], state["_transfers"] = state.pop("meshes"), state.pop("transfers")
+        for key, default in (("_recipe", None), ("_finest", None), ("_levels", 0), ("bisection_marks", None)):
+            state.setdefault(key, default)
+        self.__dict__.update(state)
+
+    def __repr__(self) -> str:
+        state = ", coarse levels released" if self.released else ""
+        return f"MeshHierarchy({self.kind}, {self.levels} levels, {self.finest.num_points} fine nodes{state})"
+
+    @property
+    def meshes(self) -> List[Mesh]:
+        if self._meshes is None:
+            self._restore()
+        return self._meshes
+
+    @meshes.setter
+    def meshes(self, value: List[Mesh]) -> None:
+        self._meshes, self._finest, self._recipe = value, None, None
+
+    @property
+    def transfers(self) -> List[Transfer]:
+        if self._transfers is None:
+            self._restore()
+        return self._transfers
+
+    @transfers.setter
+    def transfers(self, value: List[Transfer]) -> None:
+        if self._meshes is None:
+            self._restore()
+        self._transfers = value
+        self._recipe = None  # no longer what build() made
+
+    @property
+    def released(self) -> bool:
+        """Are the coarse meshes and the transfers released (made again when asked for)?"""
+        return self._meshes is None
+
+    def can_release(self) -> bool:
+        """A hierarchy of build() (uniform refinement) can make its levels again; an adaptive one
+        (its marks came from solves) or one assembled by hand cannot."""
+        return self._recipe is not None
+
+    def release_coarse(self) -> bool:
+        """Drop the coarse meshes and the transfers, keep the finest mesh (the same object). They
+        are made again, bit for bit, when `meshes` or `transfers` is next read. Returns whether
+        they were released (False for a hierarchy that cannot make them again: can_release)."""
+        if self._recipe is None:
+            return False
+        if self._meshes is not None:
+            self._levels = len(self._meshes)
+            self._finest = self._meshes[-1]
+            self._meshes, self._transfers = None, None
+        return True
+
+    def _restore(self) -> None:
+        coarse, projector = self._recipe
+        meshes, transfers = _refine_uniformly(coarse, self._levels, projector)
+        fine = meshes[-1]
+        if not (np.array_equal(fine.points, self._finest.points) and np.array_equal(fine.cells, self._finest.cells)):
+            raise RuntimeError("the released hierarchy was not made again identically")  # pragma: no cover
+        meshes[-1] = self._finest  # the object the problem and its results hold
+        self._meshes, self._transfers, self._finest = meshes, transfers, None
+
+    def memory_bytes(self) -> dict:
+        """Bytes of the arrays this hierarchy holds now: {"meshes": ..., "transfers": ...} (the
+        finest mesh alone, no transfers, while released). Reads nothing back."""
+        def nb(*arrays):
+            return int(sum(a.nbytes for a in arrays if isinstance(a, np.ndarray)))
+
+        meshes = [self._finest] if self._meshes is None else self._meshes
+        return {"meshes": sum(nb(m.points, m.cells, m.facets, m.facet_tags) for m in meshes),
+                "transfers": sum(nb(t.ptr, t.parent, t.weight) for t in (self._transfers or []))}
 
     @property
     def finest(self) -> Mesh:
-        return self.meshes[-1]
+        return self._finest if self._meshes is None else self._meshes[-1]
 
     @property
     def levels(self) -> int:
-        return len(self.meshes)
+        return self._levels if self._meshes is None else len(self._meshes)
 
     @classmethod
     def build(cls, mesh: Mesh, levels: int, projector: Optional[Projector] = None,
@@ -128,13 +216,9 @@ class MeshHierarchy:
                 f"{levels} levels need about {need / 2**30:.1f} GiB ({estimate_nodes(mesh, levels):,} nodes), "
                 f"more than {memory_fraction:.0%} of the {have / 2**30:.1f} GiB available")
         _core.check_cells(mesh.points, mesh.cells, mesh.cell_type)
-        meshes, transfers = [mesh], []
-        for _ in range(levels - 1):
-            m = meshes[-1]
-            fine, t = _refined(m, _core.refine(m.points, m.cells, m.cell_type, m.facets, m.facet_tags), projector)
-            meshes.append(fine)
-            transfers.append(t)
-        return cls(meshes, transfers, time.perf_counter() - t0)
+        h = cls(*_refine_uniformly(mesh, levels, projector), time.perf_counter() - t0)
+        h._recipe = (mesh, projector)
+        return h
 
     @classmethod
     def adaptive(cls, mesh: Mesh, levels: int, problem_factory: Callable[["MeshHierarchy"], object],
@@ -274,6 +358,23 @@ def longest_edge_first(points: np.ndarray, cells: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(np.take_along_axis(cells, (best[:, None] + np.arange(3)) % 3, axis=1))
 
 
+def _refine_uniformly(mesh: Mesh, levels: int, projector: Optional[Projector]) -> Tuple[List[Mesh], List[Transfer]]:
+    """`mesh` and levels - 1 uniform refinements of it, with the transfers between them."""
+    meshes, transfers = [mesh], []
+    for _ in range(levels - 1):
+        m = meshes[-1]
+        fine, t = _refined(m, _core.refine(m.points, m.cells, m.cell_type, m.facets, m.facet_tags), projector)
+        meshes.append(fine)
+        transfers.append(t)
+    return meshes, transfers
+
+
+def index_dtype(largest: int):
+    """int32 for node, cell and entry ids up to `largest` that fit (half the bytes of int64: the
+    cells of a refined mesh and the transfers' pointers and parents), int64 otherwise."""
+    return np.int32 if largest < 2 ** 31 - 1 else np.int64
+
+
 def _refined(m: Mesh, r: dict, projector: Optional[Projector]) -> Tuple[Mesh, Transfer]:
     """The fine mesh and transfer of a refinement result of the core, boundary nodes projected."""
     points = r["points"]
@@ -284,8 +385,12 @@ def _refined(m: Mesh, r: dict, projector: Optional[Projector]) -> Tuple[Mesh, Tr
             raise ValueError(f"the boundary projector returned shape {moved.shape}, expected {(len(nb), m.dim)}")
         points[nb] = moved
     _core.check_cells(points, r["cells"], m.cell_type)
-    fine = Mesh._trusted(points, r["cells"], m.cell_type, r["facets"], r["facet_tags"])
-    return fine, Transfer(fine.num_points, m.num_points, r["ptr"], r["parent"], r["weight"])
+    # 32-bit ids where they fit (issue 15): the core reads any integer array (a 64-bit copy while it
+    # works on it, none kept); the Python side keeps half the bytes
+    ids = index_dtype(len(points))
+    fine = Mesh._trusted(points, r["cells"].astype(ids), m.cell_type, r["facets"].astype(ids), r["facet_tags"])
+    ptr = r["ptr"].astype(index_dtype(int(r["ptr"][-1])))
+    return fine, Transfer(fine.num_points, m.num_points, ptr, r["parent"].astype(index_dtype(m.num_points)), r["weight"])
 
 
 def _node_cells(cells: np.ndarray, n: int) -> Tuple[np.ndarray, np.ndarray]:

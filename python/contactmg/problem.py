@@ -221,12 +221,50 @@ class ContactProblem:
         self._A = _core.assemble_elasticity(mesh.points, mesh.cells, mesh.cell_type, material.E, material.nu)
         self.load = assemble_load(mesh, body_force, traction)
         self.fixed, self.fixed_values = dirichlet_arrays(mesh, dirichlet)
+        # how to make load and fixed_values again once released (release_hierarchy; a value set
+        # from outside is kept: the setters clear these)
+        self._load_recipe, self._values_recipe = (body_force, traction), list(dirichlet)
         self._check_rigid_motion()
         self.contact = self._contact_boundary(contact_tags, obstacle)
         self.coefficients = friction.coefficients(self.contact.nodes, self.contact.measure)
         self._solvers: Dict[CycleOptions, object] = {}
         self._build_seconds: Dict[CycleOptions, float] = {}
         self.assembly_seconds = time.perf_counter() - t0 + hierarchy.build_seconds
+
+    # The load and the Dirichlet values (n, d): held in Python until a kept core solver has its own
+    # copies (release_hierarchy), then made again from the description when asked for (16 bytes a
+    # dof in 2D; the same bits: the same assembly and the same Dirichlet data).
+    _load: Optional[np.ndarray] = None
+    _fixed_values: Optional[np.ndarray] = None
+    _load_recipe = None
+    _values_recipe = None
+
+    @property
+    def load(self) -> np.ndarray:
+        if self._load is None and self._load_recipe is not None:
+            self._load = assemble_load(self.mesh, *self._load_recipe)
+        return self._load
+
+    @load.setter
+    def load(self, value: np.ndarray) -> None:
+        self._load, self._load_recipe = value, None
+
+    @property
+    def fixed_values(self) -> np.ndarray:
+        if self._fixed_values is None and self._values_recipe is not None:
+            self._fixed_values = dirichlet_arrays(self.mesh, self._values_recipe)[1]
+        return self._fixed_values
+
+    @fixed_values.setter
+    def fixed_values(self, value: np.ndarray) -> None:
+        self._fixed_values, self._values_recipe = value, None
+
+    def _release_vectors(self) -> None:
+        """Drop the load and the Dirichlet values where they can be made again (see load)."""
+        if self._load_recipe is not None:
+            self._load = None
+        if self._values_recipe is not None:
+            self._fixed_values = None
 
     @property
     def A(self):
@@ -362,6 +400,15 @@ class ContactProblem:
         A, self._A = self.A, None
         return cls(A, *args, take_matrix=True, **kw)
 
+    # Issue 15: once the kept core solver is built (it holds its own prolongations, fine matrix, load
+    # and Dirichlet values), release the hierarchy's coarse meshes and its transfers
+    # (MeshHierarchy.release_coarse: the finest mesh stays for results and output; the others are
+    # made again, bit for bit, if anything asks for them) and the load and Dirichlet values (made
+    # again the same way: see load). Off by default: a hierarchy shared by several problems, or a load path that
+    # builds a core solver per step, would make them again and again. The single solves of the
+    # command line turn it on.
+    release_hierarchy: bool = False
+
     # Local smoothing (issue 11): None = on for adaptive hierarchies, off for uniform ones (there every
     # node of a level changes); True/False force it. Set before the first solve.
     local_smoothing: Optional[bool] = None
@@ -405,7 +452,26 @@ class ContactProblem:
             self._solvers[key] = self._new_core_solver(self.law, key, take_matrix=True)
             self._apply_local_smoothing(self._solvers[key])
             self._build_seconds[key] = time.perf_counter() - t0
+            if self.release_hierarchy:
+                self.hierarchy.release_coarse()
+                self._release_vectors()
         return self._solvers[key]
+
+    def memory_bytes(self) -> Dict[str, int]:
+        """Bytes held now, by owner: the hierarchy's meshes and transfers (Python), the problem's
+        vectors (load, Dirichlet data, contact boundary, coefficients), an assembled matrix held in
+        Python, and the kept core solvers (each one's own count: matrices, prolongations, vectors);
+        "total" is their sum. Nothing is made again to count it (a released hierarchy stays so)."""
+        h = self.hierarchy.memory_bytes()
+        c = self.contact
+        arrays = (self._load, self.fixed, self._fixed_values, self.coefficients, c.nodes, c.normals, c.gaps, c.measure,
+                  c.frames, c.facets)
+        out = {"mesh_hierarchy": h["meshes"], "transfers": h["transfers"],
+               "problem_vectors": int(sum(a.nbytes for a in arrays if isinstance(a, np.ndarray))),
+               "python_matrix": self._A.memory_bytes() if self._A is not None else 0,
+               "core": int(sum(S.memory_bytes() for S in self._solvers.values()))}
+        out["total"] = sum(out.values())
+        return out
 
     def _solver_key(self, options: CycleOptions) -> CycleOptions:
         # a core that takes the cycle per solve serves every choice with the solver of the defaults

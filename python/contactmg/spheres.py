@@ -21,7 +21,8 @@ from .hierarchy import MeshHierarchy
 from .material import Material
 from .mesh import Mesh
 from .problem import Dirichlet
-from .two_body import Body, ContactPair, TwoBodyProblem
+# two_body (scipy.sparse, the mortar modules) is imported where a problem is built: the command line
+# builds this module's parser for every command, and scipy cost a `contactmg hertz` process 32 MiB (issue 15)
 
 E, NU, RADIUS = 2000.0, 0.28, 0.4
 UPPER_CENTER, LOWER_CENTER = (0.0, 0.0, RADIUS), (0.0, 0.0, -RADIUS)
@@ -70,6 +71,8 @@ def spheres_problem(cell: str = "hexahedron", levels: int = DEFAULT_LEVELS, fric
         raise ValueError(f"the displacement D must lie in (0, {0.25 * RADIUS}) (small deformations), got {displacement!r}")
     if cell not in ("tetra", "hexahedron"):
         raise ValueError(f"cell must be 'tetra' or 'hexahedron', got {cell!r}")
+    from .two_body import Body, ContactPair, TwoBodyProblem
+
     upper = MeshHierarchy.build(half_ball(cell, UPPER_CENTER, RADIUS, k=upper_k, inner=UPPER_INNER), levels,
                                 projector=SphereProjector(UPPER_CENTER, RADIUS, (BALL_SURFACE,)))
     lower = MeshHierarchy.build(lower_half_ball(cell, lower_k, lower_inner), levels,

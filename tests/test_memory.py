@@ -1,0 +1,180 @@
+"""Issue 15, memory: what a solve keeps in Python. Refined meshes and transfers hold 32-bit ids; a
+problem that releases its hierarchy once the core solver is built solves to the same bits, and its
+results, VTU output and contact check need nothing of what was released; the released levels come
+back identical when asked for; the accounting by owner adds up. (The figures themselves come from
+benchmarks/parallel_bandwidth.py memory: no timed or sized test here.)"""
+import json
+import subprocess
+import sys
+
+import meshio
+import numpy as np
+import pytest
+
+from contactmg.checks import VIOLATION_TOL, contact_conditions
+from contactmg.hertz import hertz_adaptive_hierarchy, hertz_problem, hertz_problem_on
+from contactmg.sphere import sphere_problem
+
+
+def released(make):
+    p = make()
+    p.release_hierarchy = True
+    return p
+
+
+def test_refined_meshes_and_transfers_hold_32_bit_ids():
+    h = hertz_problem("triangle", 4, 0.4).hierarchy
+    for m in h.meshes[1:]:
+        assert m.cells.dtype == np.int32 and m.facets.dtype == np.int32
+    for t in h.transfers:
+        assert t.ptr.dtype == np.int32 and t.parent.dtype == np.int32 and t.weight.dtype == np.float64
+    # the scipy view of a transfer still works on them
+    P = h.transfers[-1].matrix()
+    assert np.allclose(P @ np.ones(P.shape[1]), 1.0)
+
+
+@pytest.mark.parametrize("make", [lambda: hertz_problem("triangle", 5, 0.4), lambda: hertz_problem("quad", 4, 0.4),
+                                  lambda: sphere_problem("tetra", 2, 0.4)])
+def test_a_released_hierarchy_solves_to_the_same_bits(make):
+    keep = make().solve("nmg", threads=1)
+    p = released(make)
+    got = p.solve("nmg", threads=1)
+    assert p.hierarchy.released
+    assert got.cycles == keep.cycles
+    assert np.array_equal(got.displacement, keep.displacement)
+    assert np.array_equal(got.contact_force, keep.contact_force)
+    assert np.array_equal(got.node_state, keep.node_state)
+    assert got.mesh is p.mesh is p.hierarchy.finest
+
+
+def test_results_output_and_check_need_nothing_released(tmp_path):
+    p = released(lambda: hertz_problem("triangle", 5, 0.4))
+    r = p.solve("nmg")
+    assert p.hierarchy.released
+    levels = p.hierarchy.levels
+    assert p.memory_bytes()["problem_vectors"] < p.mesh.num_points * p.mesh.dim * 8  # load and Dirichlet values dropped
+    path = tmp_path / "out.vtu"
+    r.write_vtu(path)
+    c = contact_conditions(p, r)
+    counts, width, reaction = r.counts(), r.contact_halfwidth, r.reaction
+    # none of it made the coarse levels again
+    assert p.hierarchy.released and p.hierarchy.levels == levels
+    assert p.hierarchy.memory_bytes()["transfers"] == 0
+    back = meshio.read(path)
+    assert np.array_equal(back.point_data["displacement"][:, :2], r.displacement)  # VTU pads 2D vectors
+    assert np.array_equal(back.cells_dict["triangle"], p.mesh.cells)
+    assert counts["contact_nodes"] > 0 and width > 0 and reaction[1] > 0
+    assert c["max"] < VIOLATION_TOL
+    # the check made the load and the Dirichlet values again: the same bits as a fresh problem's
+    fresh = hertz_problem("triangle", 5, 0.4)
+    assert np.array_equal(p.load, fresh.load) and np.array_equal(p.fixed_values, fresh.fixed_values)
+    # a second solve runs on the kept core solver: still released
+    again = p.solve("nmg", threads=1)
+    assert p.hierarchy.released and again.converged
+
+
+def test_released_levels_come_back_identical():
+    keep = hertz_problem("triangle", 5, 0.4).hierarchy
+    p = released(lambda: hertz_problem("triangle", 5, 0.4))
+    p.solver
+    h = p.hierarchy
+    assert h.released and h.levels == keep.levels and h.finest is p.mesh
+    for a, b in zip(h.meshes, keep.meshes):
+        assert np.array_equal(a.points, b.points) and np.array_equal(a.cells, b.cells)
+        assert np.array_equal(a.facets, b.facets) and np.array_equal(a.facet_tags, b.facet_tags)
+    for a, b in zip(h.transfers, keep.transfers):
+        assert np.array_equal(a.ptr, b.ptr) and np.array_equal(a.parent, b.parent) and np.array_equal(a.weight, b.weight)
+    assert not h.released and h.meshes[-1] is p.mesh
+    # what needs the transfers (a second core solver: the linear reference) works on the levels made again
+    lin = p.solve("linear")
+    assert lin.converged
+
+
+def test_adaptive_hierarchies_are_kept():
+    h = hertz_adaptive_hierarchy(3, 0.4)
+    p = hertz_problem_on(h, 0.4)
+    p.release_hierarchy = True
+    assert not h.can_release()
+    assert p.solve("nmg").converged
+    assert not h.released and len(h.transfers) == h.levels - 1
+
+
+def test_memory_accounting_adds_up():
+    p = hertz_problem("triangle", 5, 0.4)
+    before = p.memory_bytes()
+    assert before["core"] == 0 and before["python_matrix"] > 0
+    p.release_hierarchy = True
+    p.solve("nmg")
+    after = p.memory_bytes()
+    for m in (before, after):
+        assert m["total"] == sum(v for k, v in m.items() if k != "total")
+    # the core took the matrix over, the coarse meshes, the transfers, the load and the Dirichlet
+    # values are gone, the finest mesh stays
+    assert after["python_matrix"] == 0 and after["transfers"] == 0 and after["core"] == p.solver.memory_bytes()
+    assert before["problem_vectors"] - after["problem_vectors"] == 2 * 8 * p.mesh.num_points * p.mesh.dim
+    fine = p.mesh
+    assert after["mesh_hierarchy"] == sum(a.nbytes for a in (fine.points, fine.cells, fine.facets, fine.facet_tags))
+    assert after["mesh_hierarchy"] < before["mesh_hierarchy"]
+
+
+def test_the_command_line_parser_does_not_load_scipy():
+    # scipy (for the two-body commands) cost a `contactmg hertz` process 32 MiB at level 9
+    code = "import sys; from contactmg import cli; cli._parser(); print(json.dumps('scipy' in sys.modules))"
+    out = subprocess.run([sys.executable, "-c", "import json; " + code], capture_output=True, text=True, check=True)
+    assert json.loads(out.stdout) is False
+
+
+def test_the_command_line_releases_for_a_single_solve(tmp_path, monkeypatch):
+    from contactmg import cli, hertz
+
+    made = []
+    real = hertz.hertz_problem
+
+    def spy(*a, **kw):
+        made.append(real(*a, **kw))
+        return made[-1]
+
+    monkeypatch.setattr(hertz, "hertz_problem", spy)
+    out = tmp_path / "r.json"
+    assert cli.main(["hertz", "--levels", "4", "--json", str(out), "--vtu", str(tmp_path / "r.vtu"), "-q"]) == 0
+    assert made[-1].hierarchy.released
+    rep = json.loads(out.read_text())
+    assert rep["converged"] and rep["hierarchy"] == "uniform"
+    # a load path builds a core solver per step: it keeps its hierarchy
+    assert cli.main(["hertz", "--levels", "3", "--steps", "2", "--json", str(out), "-q"]) == 0
+    assert not made[-1].hierarchy.released
+
+
+def test_hierarchies_pickle_and_old_pickles_load():
+    import pickle
+
+    from contactmg.hierarchy import MeshHierarchy
+
+    p = released(lambda: hertz_problem("triangle", 3, 0.4))
+    p.solver
+    h = pickle.loads(pickle.dumps(p.hierarchy))
+    assert h.released and h.levels == 3
+    assert np.array_equal(h.meshes[1].cells, hertz_problem("triangle", 3, 0.4).hierarchy.meshes[1].cells)
+    # the state of the former dataclass (public meshes / transfers)
+    old = MeshHierarchy.__new__(MeshHierarchy)
+    k = hertz_problem("triangle", 3, 0.4).hierarchy
+    old.__setstate__({"meshes": k.meshes, "transfers": k.transfers, "build_seconds": 1.0, "kind": "uniform",
+                      "estimated_error": []})
+    assert old.levels == 3 and old.finest is k.finest and not old.released and not old.can_release()
+
+
+@pytest.mark.parametrize("make", [lambda: hertz_problem("triangle", 4, 0.4), lambda: hertz_problem("quad", 3, 0.4),
+                                  lambda: sphere_problem("tetra", 2, 0.4), lambda: sphere_problem("hexahedron", 2, 0.4)])
+def test_the_stiffness_pattern_is_every_pair_of_nodes_sharing_a_cell(make):
+    # the core builds it row by row from the cells around each node (no list of every cell's k^2 pairs)
+    p = make()
+    m = p.mesh
+    k = m.cells.shape[1]
+    cells = m.cells.astype(np.int64)
+    i, j = np.repeat(cells, k, axis=1).ravel(), np.tile(cells, (1, k)).ravel()
+    key = np.unique(i * m.num_points + j)
+    rows, cols = key // m.num_points, key % m.num_points
+    A = p.A
+    indptr, indices = np.asarray(A.indptr), np.asarray(A.indices)
+    assert np.array_equal(indptr, np.r_[0, np.cumsum(np.bincount(rows, minlength=m.num_points))])
+    assert np.array_equal(indices, cols)
