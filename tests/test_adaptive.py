@@ -342,7 +342,7 @@ def test_algorithm2_on_adaptive_levels_for_the_paper_frictions(F, hertz_adaptive
     F <= 2 cycles bounded (<= 25) and within a spread of 4 from level 5 on. Not met, so not
     asserted: issue 11's spread <= 4 from level 3 on (measured 2026-12-02 with the default
     omega = 1.3: levels 3-9 spread 3-5 for F <= 2, 5 at F = 0.4; level 3, a 3-level hierarchy
-    with an exact 28-node coarse solve, needs 9-12 cycles; README "Issue 11, third part"). With
+    with an exact 28-node coarse solve, needs 9-12 cycles; docs/history/adaptive.md, "Issue 11, third part"). With
     plain Gauss-Seidel (omega = 1) F = 0.4 failed the level-5-on spread here (12 / 15 / 17)."""
     h = hertz_adaptive_9
     cycles = []

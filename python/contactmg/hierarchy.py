@@ -415,7 +415,7 @@ def boundary_interpolation(coarse: Mesh, fine_points: np.ndarray, t: Transfer, t
     (bound_restriction.hpp scales by the row's sum of |weights|, which covers it).
     Not used by default: it was the suspected cause of the cycle growth on the Hertz hierarchies,
     and measured it is not (linear rates the same to 0.005 in 2D and 3D, Algorithm 2 the same or up
-    to 4 cycles worse: the negative weights tighten the restricted obstacles; README, issue 11,
+    to 4 cycles worse: the negative weights tighten the restricted obstacles; docs/history/adaptive.md, issue 11,
     third part, benchmarks/cycle_growth.py). Kept for that comparison and for meshes whose
     projection moves nodes by more than h^2 / (8 R)."""
     if coarse.cell_type not in ("triangle", "tetra"):

@@ -41,7 +41,7 @@ SOLVE_TAKES_OMEGA = "omega:" in (_core.ContactSolver2D.solve.__doc__ or "")
 # elasticity levels off near 0.34 per F(3,3) cycle on the adaptive Hertz levels (Q1: 0.14 on the
 # unit square); over-relaxed it contracts by 0.26 / 0.235 / 0.216 / 0.216 at level 11 with omega
 # 1.2 / 1.3 / 1.4 / 1.5 at the same cost per sweep, and Algorithm 2 at F = 0.4 needs 9-15 cycles over
-# levels 3-11 instead of 10-17 (README, issue 11, third part). 1.3 rather than 1.4: within 0.02 in
+# levels 3-11 instead of 10-17 (docs/history/adaptive.md, issue 11, third part). 1.3 rather than 1.4: within 0.02 in
 # rate, and 1.4 costs one cycle on the small uniform level 3 at F = 0.4 (16 against 15). The
 # tetrahedral half ball gains too (level 3: 0.40 -> 0.32, 19 -> 16 cycles). Quadrilaterals gain nothing
 # (0.171 -> 0.157, 0.226 -> 0.225 at 1.4) and hexahedra lose (0.19 -> 0.25): plain Gauss-Seidel there.
