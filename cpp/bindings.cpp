@@ -527,6 +527,22 @@ PYBIND11_MODULE(_core, m) {
 
   m.def("openmp", [] { return have_openmp(); }, "whether the core was built with OpenMP threads");
   m.def("max_threads", [] { return max_threads(); }, "the cores the threads of a solve may use (threads=0)");
+  // issue 15/10 tuning and test hooks (process-wide)
+  m.def("parallel_grains", [] { return py::make_tuple(parallel_grains().colour, parallel_grains().level_rows); },
+        "(colour, level_rows): average rows per colour / coarse-level rows below which work stays on one thread");
+  m.def("set_parallel_grains", [](Index colour, Index level_rows) {
+    if (colour < 0 || level_rows < 0) throw InputError("grains must be >= 0");
+    parallel_grains().colour = colour;
+    parallel_grains().level_rows = level_rows;
+  });
+  m.def("coarsest_max_rank", [] { return CoarsestSolver::max_rank(); },
+        "changed coarsest rows up to which an update corrects the kept factorization (0: factorize every time)");
+  m.def("set_coarsest_max_rank", [](Index r) {
+    if (r < 0) throw InputError("the rank must be >= 0");
+    CoarsestSolver::max_rank() = r;
+  });
+  m.def("coarsest_factorizations", [] { return CoarsestSolver::factorizations_total(); },
+        "factorizations of a coarsest-level matrix in this process so far");
   m.def("stream_triad", [](Index n, int repeats, int threads) {
     if (n < 1 || repeats < 1) throw InputError("stream_triad needs n >= 1 and repeats >= 1");
     py::gil_scoped_release release;

@@ -46,12 +46,17 @@ void restrict_bounds(const Prolongation<d>& P, const std::uint8_t* mask, const d
 }
 
 // The same for the slack lo - x, hi - x that remains to an iterate x on the fine level, formed per
-// row (a scratch pair of fine vectors and a pass less, issue 15; the same bits).
+// row (a scratch pair of fine vectors and a pass less, issue 15; the same bits). bounded (per fine
+// row, or nullptr): the rows with a finite bound; the others add nothing and are skipped (this
+// serial pass over every fine row of a level ran at each visit of the coarse cycle; the bounded
+// rows are the few near the contact zone).
 template <int d>
-void restrict_slack(const Prolongation<d>& P, const double* lo_f, const double* hi_f, const double* x, double* lo_c, double* hi_c) {
+void restrict_slack(const Prolongation<d>& P, const double* lo_f, const double* hi_f, const double* x, double* lo_c, double* hi_c,
+                    const std::uint8_t* bounded = nullptr) {
   std::fill(lo_c, lo_c + d * P.cols, -kInf);
   std::fill(hi_c, hi_c + d * P.cols, kInf);
   for (Index i = 0; i < P.rows; ++i) {
+    if (bounded && !bounded[i]) continue;
     double lo[d], hi[d];
     for (int c = 0; c < d; ++c) { lo[c] = lo_f[i * d + c] - x[i * d + c]; hi[c] = hi_f[i * d + c] - x[i * d + c]; }
     restrict_row_bounds<d>(P, nullptr, i, lo, hi, lo_c, hi_c);

@@ -125,8 +125,9 @@ class CoarseCycle {
     restrict_residual<d>(P, mask, r_fine, C.b.data(), C.r.data());  // C.r: scratch until level top smooths
     if (bounded) restrict_bounds<d>(P, mask, bounds, C.lo.data(), C.hi.data());
     set_bounded(C, bounded);
-    std::fill(C.x.begin(), C.x.end(), 0.0);
+    zero(C.x);
     cur_ = &orders(opt.ordering);
+    serial_rows_ = parallel_grains().level_rows;
     lines_ = lines;
     omega_ = opt.omega;
     cycle(opt, top, opt.cycle);
@@ -148,6 +149,11 @@ class CoarseCycle {
     std::vector<std::uint8_t> bounded;
     bool any_bounds = false;
   };
+
+  // (on all threads on the large levels, like every pass of the cycle)
+  static void zero(std::vector<double>& x) {
+    parallel_for((Index)x.size(), [&](Index k) { x[k] = 0.0; }, 8 * kParallelGrain);
+  }
 
   // (on all threads: the serial loops of a cycle hold back the second thread, issue 15)
   static void set_bounded(Vectors& L, bool bounded) {
@@ -174,6 +180,17 @@ class CoarseCycle {
   }
 
   void cycle(const CycleOptions& opt, int l, CycleType type) {
+    // A level below parallel_grains().level_rows rows, and every coarser one, runs on the calling thread: its
+    // loops are too short to pay for waking the second thread (a W/F-cycle visits the small
+    // levels most often). Every loop gives the same bits on any thread count, so this is a
+    // matter of time only.
+    if (!serial_ && H_.matrix(l).rows < serial_rows_ && team_size() > 1) {
+      const ThreadScope one(1);
+      serial_ = true;
+      cycle(opt, l, type);
+      serial_ = false;
+      return;
+    }
     Vectors& L = lv_[l];
     if (l == 0) { solve_coarsest(opt); return; }
     const BlockMatrix<d>& A = H_.matrix(l);
@@ -186,9 +203,9 @@ class CoarseCycle {
       A.residual(L.x.data(), L.b.data(), L.r.data());  // one pass (was a product and a vector pass)
       restrict_residual<d>(P, nullptr, L.r.data(), C.b.data(), C.r.data());
       // the coarser level gets the slack that remains on this one
-      if (L.any_bounds) restrict_slack<d>(P, L.lo.data(), L.hi.data(), L.x.data(), C.lo.data(), C.hi.data());
+      if (L.any_bounds) restrict_slack<d>(P, L.lo.data(), L.hi.data(), L.x.data(), C.lo.data(), C.hi.data(), L.bounded.data());
       set_bounded(C, L.any_bounds);
-      std::fill(C.x.begin(), C.x.end(), 0.0);
+      zero(C.x);
       cycle(opt, l - 1, (type == CycleType::F && v == 1) ? CycleType::V : type);
       prolongate_add<d>(P, nullptr, C.x.data(), L.x.data());
     }
@@ -201,7 +218,7 @@ class CoarseCycle {
     const Index n = (Index)L.x.size();
     Eigen::Map<Eigen::VectorXd> x(L.x.data(), n);
     Eigen::Map<const Eigen::VectorXd> b(L.b.data(), n);
-    x = H_.coarsest_factor().solve(b);
+    H_.solve_coarsest(L.b.data(), L.x.data());
     if (!L.any_bounds) return;
     bool inside = true;
     for (Index k = 0; k < n; ++k) inside = inside && x[k] >= L.lo[k] && x[k] <= L.hi[k];
@@ -229,6 +246,8 @@ class CoarseCycle {
     }
   }
 
+  Index serial_rows_ = 0;  // parallel_grains().level_rows of this correction (see cycle())
+  bool serial_ = false;
   const GalerkinHierarchy<d>& H_;
   std::vector<SweepOrder> order_, coloured_;
   SweepOrder coarsest_all_;                      // every row of the coarsest level, coloured

@@ -7,6 +7,7 @@
 #include <unordered_map>
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
+#include "mg/coarsest_solver.hpp"
 #include "mg/galerkin.hpp"
 #include "mg/level_smoothers.hpp"
 #include "mg/line_smoother.hpp"
@@ -51,14 +52,22 @@ class GalerkinHierarchy {
   const Level& level(int l) const { return lv_[l]; }
   const BlockMatrix<d>& matrix(int l) const { return lv_[l].A; }
   const Prolongation<d>& prolongation(int l) const { return P_[l]; }
-  const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>& coarsest_factor() const { return ldlt_; }
+  // x = A_0^{-1} b on the coarsest level (inert dofs: x = b). Not const inside: a solve whose
+  // low-rank correction is not accurate enough factorizes the coarsest matrix anew
+  // (mg/coarsest_solver.hpp), which changes how, not what, is solved.
+  void solve_coarsest(const double* b, double* x) const {
+    coarsest_.solve(b, x, [&](Eigen::SparseMatrix<double>& S, Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>& f) {
+      return factorize(S, f);
+    });
+  }
+  int coarsest_factorizations() const { return coarsest_.factorizations(); }
   int rebuilds() const { return rebuilds_; }
   double rebuild_seconds() const { return rebuild_seconds_; }
   std::size_t memory_bytes() const {
     std::size_t s = 0;
     for (auto& L : lv_) s += L.A.memory_bytes() + sizeof(double) * L.Dinv.size() + L.lines.memory_bytes() + L.inert.size();
     for (auto& P : P_) s += P.memory_bytes();
-    return s;
+    return s + coarsest_.memory_bytes();
   }
 
   // Galerkin products for the fine mask, then the fine Hessian blocks (node -> block) on top.
@@ -80,7 +89,7 @@ class GalerkinHierarchy {
       apply_deltas();
     }
     for (int l = 0; l < nc; ++l) factor_lines(l);
-    factorize_coarsest();
+    factorize_coarsest(false);
     ++rebuilds_;
     incremental_ = 0;
     rebuild_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -126,7 +135,7 @@ class GalerkinHierarchy {
       }
     for (const auto& [i, H] : new_hessian) add_fine_diagonal(i, H, new_mask);
     apply_deltas();
-    factorize_coarsest();
+    factorize_coarsest(true);
     ++rebuilds_;
     ++incremental_;
     rebuild_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -181,7 +190,10 @@ class GalerkinHierarchy {
   // the level's line factorization is out of date (refactored on its next use: O(rows))
   void factor_lines(int l) { lv_[l].lines_stale = true; }
 
-  void factorize_coarsest() {
+  // The coarsest matrix with the inert dofs' rows and columns dropped and identity on their
+  // diagonal, to the coarsest solver: after an incremental update (update) as a low-rank
+  // correction of the kept factorization where the change allows it, else factorized anew.
+  void factorize_coarsest(bool update) {
     const BlockMatrix<d>& A = lv_[0].A;
     const Index n = A.rows * d;
     std::vector<Eigen::Triplet<double>> t;
@@ -198,20 +210,28 @@ class GalerkinHierarchy {
       if (lv_[0].inert[k]) t.emplace_back(k, k, 1.0);
     Eigen::SparseMatrix<double> S(n, n);
     S.setFromTriplets(t.begin(), t.end());
+    coarsest_.set(std::move(S), update, [&](Eigen::SparseMatrix<double>& M, Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>& f) {
+      return factorize(M, f);
+    });
+  }
+
+  // Factorizes S into f; 1, or 2 when S had to be shifted (S then holds the shifted matrix).
+  static int factorize(Eigen::SparseMatrix<double>& S, Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>& f) {
+    const Index n = S.rows();
     // The pattern changes with the truncation (inert dofs, entries that cancel to zero): analysing
     // it once and refactorizing a different pattern wrote out of bounds (tilted obstacles). The
     // coarsest matrix is small, so it is analysed every time.
-    ldlt_.compute(S);
+    f.compute(S);
     const Eigen::VectorXd diag = S.diagonal();
-    if (!factorization_ok(diag)) {
-      // Truncation through rotated fine frames can make coarse dofs linearly dependent: the Galerkin
-      // matrix is then only semi-definite, with a right-hand side P~^T r in its range. Solving with
-      // A + eps diag(A) still lowers the energy (J(x) = -x^T A x / 2 - eps x^T D x <= 0).
-      for (Index k = 0; k < n; ++k) S.coeffRef(k, k) *= 1 + 1e-10;
-      ldlt_.compute(S);
-      if (!factorization_ok(diag))
-        throw InputError("the coarsest-level matrix is singular: is rigid-body motion left free by the Dirichlet conditions?");
-    }
+    if (factorization_ok(f, diag)) return 1;
+    // Truncation through rotated fine frames can make coarse dofs linearly dependent: the Galerkin
+    // matrix is then only semi-definite, with a right-hand side P~^T r in its range. Solving with
+    // A + eps diag(A) still lowers the energy (J(x) = -x^T A x / 2 - eps x^T D x <= 0).
+    for (Index k = 0; k < n; ++k) S.coeffRef(k, k) *= 1 + 1e-10;
+    f.compute(S);
+    if (!factorization_ok(f, diag))
+      throw InputError("the coarsest-level matrix is singular: is rigid-body motion left free by the Dirichlet conditions?");
+    return 2;
   }
 
   // Each pivot against its own row's diagonal entry, not against the largest pivot: the friction
@@ -219,10 +239,10 @@ class GalerkinHierarchy {
   // increment) put entries of 1e12 on the coarsest diagonal next to entries of 1e2 (largest pivot
   // 4e17, smallest 11.5), and that positive definite matrix was refused as singular (the 8-layer
   // cork's load path, step 2).
-  bool factorization_ok(const Eigen::VectorXd& diag) const {
-    if (ldlt_.info() != Eigen::Success) return false;
-    const auto D = ldlt_.vectorD();
-    const auto& to = ldlt_.permutationP().indices();  // row i of S is row to[i] of the factor
+  static bool factorization_ok(const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>& f, const Eigen::VectorXd& diag) {
+    if (f.info() != Eigen::Success) return false;
+    const auto D = f.vectorD();
+    const auto& to = f.permutationP().indices();  // row i of S is row to[i] of the factor
     for (Index i = 0; i < (Index)diag.size(); ++i)
       if (!(D[to[i]] > 1e-13 * diag[i])) return false;
     return true;
@@ -235,7 +255,7 @@ class GalerkinHierarchy {
   // position in A -> its entry of delta_: a map of the few touched blocks (a vector over every
   // coarse block was 5 bytes a dof at level 9, issue 15)
   std::vector<std::unordered_map<Index, std::int32_t>> slot_;
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt_;
+  mutable CoarsestSolver coarsest_;
   int rebuilds_ = 0, incremental_ = 0;
   bool lines_found_ = false;
   double rebuild_seconds_ = 0;

@@ -73,19 +73,33 @@ class SweepOrder {
 
   // f(i) for the rows of a level of n rows, in order (forward) or reversed; coloured: the colours
   // in order or reversed, the rows of one colour on all threads (f must then touch row i only).
+  // One parallel region per sweep with a barrier between colours, not a region per colour: each
+  // region start wakes the second thread, which sleeps between regions (OMP_WAIT_POLICY=PASSIVE),
+  // and a fork-join costs about two such hand-overs where a barrier costs one (issue 15). Sweeps
+  // whose colours average fewer than parallel_grains().colour rows run on the calling thread: the hand-overs
+  // would cost more than the second thread saves. Rows of one colour are independent, so the
+  // result is the same bit for bit either way.
   template <class F>
   void visit(Index n, bool forward, F&& f) const {
     if (coloured()) {
       const Index nc = num_colours();
+      const Index total = colour_ptr_.back() - colour_ptr_.front();
+      const auto row = [&](Index q) { return contiguous_ ? q : rows_[q]; };
+#ifdef CONTACTMG_OPENMP
+      if (total >= parallel_grains().colour * nc && team_size() > 1) {
+#pragma omp parallel
+        for (Index cc = 0; cc < nc; ++cc) {
+          const Index c = forward ? cc : nc - 1 - cc;
+          const Index b = colour_ptr_[c], e = colour_ptr_[c + 1];
+#pragma omp for schedule(static)
+          for (Index q = b; q < e; ++q) f(row(q));
+        }
+        return;
+      }
+#endif
       for (Index cc = 0; cc < nc; ++cc) {
         const Index c = forward ? cc : nc - 1 - cc;
-        const Index b = colour_ptr_[c], m = colour_ptr_[c + 1] - b;
-        if (contiguous_) {
-          parallel_for(m, [&](Index q) { f(b + q); }, 1024);
-          continue;
-        }
-        const Index* r = rows_.data() + b;
-        parallel_for(m, [&](Index q) { f(r[q]); }, 1024);
+        for (Index q = colour_ptr_[c]; q < colour_ptr_[c + 1]; ++q) f(row(q));
       }
       return;
     }

@@ -1,0 +1,195 @@
+// Exact solves with the coarsest-level matrix, kept current across incremental coarse updates by a
+// low-rank correction of one kept factorization instead of a new factorization per update.
+//
+// Why (issue 10): on the 3D sphere (tetrahedra, level 3, F = 0.4) the friction Hessian of the
+// sliding nodes changes in every cycle, so the coarse levels are updated in every cycle; the
+// update itself is cheap (proportional to the change), but the coarsest matrix (2,286 dofs) was
+// analysed and factorized again each time: ~40 ms, a third of an Algorithm-2 cycle and most of
+// its cost above a linear cycle.
+//
+// What: S0 is the matrix of the last factorization. An update changes S only on a few rows K
+// (the coarse dofs under the nodes whose truncation or Hessian changed), so S = S0 + E M E^T with
+// E the columns of the identity at K and M = (S - S0)[K, K]. Then (Woodbury)
+//   S^{-1} b = y - Z (I + M Z_K)^{-1} M y_K,   y = S0^{-1} b,   Z = S0^{-1} E,
+// with Z_K, y_K the rows K. The columns of Z are kept per dof while S0 lives (the changed rows of
+// consecutive updates are mostly the same), so an update costs the new columns and a |K| x |K|
+// LU. S0 is factorized anew when K grows past max_rank(), when the capacitance I + M Z_K is
+// ill-conditioned, when a solve's backward error is not at round-off level, and on every full
+// rebuild of the hierarchy. The solutions equal those of a new factorization to round-off (not
+// bit for bit); everything here is serial and its order fixed, so they do not depend on the
+// thread count (no Eigen matrix-matrix product, which may run on OpenMP threads).
+#pragma once
+#include <cmath>
+#include <unordered_map>
+#include <vector>
+#include <Eigen/Dense>
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
+#include "common.hpp"
+#include "parallel.hpp"
+
+namespace cmg {
+
+class CoarsestSolver {
+ public:
+  using SpMat = Eigen::SparseMatrix<double>;
+  // Above this many changed rows a new factorization is cheaper than the columns of Z (each one a
+  // solve with S0: at 2,286 dofs a solve is ~1 % of a factorization). 0: factorize every time
+  // (the behaviour before; tests compare the two). Process-wide, like the count of factorizations.
+  static Index& max_rank() {
+    static Index r = 96;
+    return r;
+  }
+  static long& factorizations_total() {
+    static long n = 0;
+    return n;
+  }
+
+  // The matrix S to solve with from now on (symmetric, compressed). may_update: a low-rank
+  // correction of the kept factorization is allowed (incremental coarse updates); false forces a
+  // new one. factor(S, ldlt) factorizes S into ldlt and returns 1, or 2 when it had to shift S
+  // (semi-definite: it then holds the shifted matrix; no low-rank corrections of that), or throws.
+  template <class Factor>
+  void set(SpMat S, bool may_update, Factor&& factor) {
+    S.makeCompressed();
+    S_ = std::move(S);
+    snorm_ = 0;
+    for (Index i = 0; i < S_.outerSize(); ++i) {
+      double s = 0;
+      for (SpMat::InnerIterator it(S_, i); it; ++it) s += std::abs(it.value());
+      snorm_ = std::max(snorm_, s);  // S symmetric: column sums are row sums
+    }
+    if (may_update && have_factor_ && !shifted_ && low_rank_update()) return;
+    refactor(factor);
+  }
+
+  // x = S^{-1} b (n entries each)
+  template <class Factor>
+  void solve(const double* b, double* x, Factor&& factor) {
+    const Index n = S_.rows();
+    Eigen::Map<const Eigen::VectorXd> bv(b, n);
+    Eigen::Map<Eigen::VectorXd> xv(x, n);
+    if (K_.empty()) { xv = ldlt_.solve(bv); return; }
+    woodbury_solve(bv, xv);
+    // The correction cancels large terms when M is large against S0 (a node that has just begun
+    // to slide: friction Hessian entries of 1e12 beside 1e2, see factorization_ok): accept the
+    // result only at round-off level backward error, else factorize S itself.
+    if (!accurate(bv, xv)) {
+      refactor(factor);
+      xv = ldlt_.solve(bv);
+    }
+  }
+
+  int factorizations() const { return factorizations_; }
+  Index rank() const { return (Index)K_.size(); }
+  std::size_t memory_bytes() const {
+    return sizeof(double) * (Z_.size() + S0_.nonZeros() + S_.nonZeros()) + sizeof(int) * (S0_.nonZeros() + S_.nonZeros());
+  }
+
+ private:
+  template <class Factor>
+  void refactor(Factor&& factor) {
+    shifted_ = factor(S_, ldlt_) == 2;
+    S0_ = S_;
+    K_.clear();
+    zcol_.clear();
+    Z_.resize(S_.rows(), 0);
+    have_factor_ = true;
+    ++factorizations_;
+    ++factorizations_total();
+  }
+
+  // K, M and the capacitance for S - S0; false when a new factorization is needed.
+  bool low_rank_update() {
+    // below 4 max_rank() rows a factorization costs about what the columns of Z cost (the 2D
+    // coarsest levels: 56 dofs): those keep the plain factorization, and their bits
+    if (max_rank() == 0 || S_.rows() != S0_.rows() || S_.rows() < 4 * max_rank()) return false;
+    const SpMat D = S_ - S0_;
+    std::vector<Index> rows;
+    std::vector<char> in(S_.rows(), 0);
+    for (Index j = 0; j < D.outerSize(); ++j)
+      for (SpMat::InnerIterator it(D, j); it; ++it)
+        if (it.value() != 0 && !in[it.row()]) { in[it.row()] = 1; rows.push_back(it.row()); }
+    if (max_rank() == 0 || (Index)rows.size() > max_rank()) return false;
+    std::sort(rows.begin(), rows.end());
+    K_ = rows;
+    if (K_.empty()) return true;  // S == S0: plain solves
+    const Index k = (Index)K_.size(), n = S_.rows();
+    // columns of Z for the dofs of K not seen since S0 was factorized
+    Index missing = 0;
+    for (Index r : K_) missing += !zcol_.count(r);
+    if (Z_.cols() + missing > 2 * max_rank()) { K_.clear(); return false; }  // bounds the memory of Z
+    if (missing) {
+      const Index old = Z_.cols();
+      Z_.conservativeResize(n, old + missing);
+      Index c = old;
+      Eigen::VectorXd e = Eigen::VectorXd::Zero(n);
+      for (Index r : K_) {
+        if (zcol_.count(r)) continue;
+        e[r] = 1;
+        Z_.col(c) = ldlt_.solve(e);
+        e[r] = 0;
+        zcol_[r] = c++;
+      }
+    }
+    std::vector<Index> pos(n, -1);
+    for (Index a = 0; a < k; ++a) pos[K_[a]] = a;
+    M_.setZero(k, k);
+    for (Index j = 0; j < D.outerSize(); ++j)
+      for (SpMat::InnerIterator it(D, j); it; ++it)
+        if (it.value() != 0) M_(pos[it.row()], pos[it.col()]) = it.value();
+    // C = I + M Z_K, by explicit loops in a fixed order (see the header)
+    Eigen::MatrixXd C = Eigen::MatrixXd::Identity(k, k);
+    for (Index b = 0; b < k; ++b) {
+      const Index zc = zcol_.at(K_[b]);
+      for (Index a = 0; a < k; ++a) {
+        double s = 0;
+        for (Index q = 0; q < k; ++q) s += M_(a, q) * Z_(K_[q], zc);
+        C(a, b) += s;
+      }
+    }
+    {
+      const ThreadScope one(1);  // Eigen's blocked LU may run its products on OpenMP threads
+      cap_.compute(C);
+    }
+    if (!(cap_.rcond() > 1e-10)) { K_.clear(); return false; }
+    return true;
+  }
+
+  void woodbury_solve(const Eigen::Map<const Eigen::VectorXd>& b, Eigen::Map<Eigen::VectorXd>& x) const {
+    const Index k = (Index)K_.size(), n = S_.rows();
+    x = ldlt_.solve(b);
+    Eigen::VectorXd t(k);
+    for (Index a = 0; a < k; ++a) {
+      double s = 0;
+      for (Index q = 0; q < k; ++q) s += M_(a, q) * x[K_[q]];
+      t[a] = s;
+    }
+    const Eigen::VectorXd w = cap_.solve(t);
+    for (Index a = 0; a < k; ++a) {
+      const double* z = Z_.data() + zcol_.at(K_[a]) * n;
+      const double wa = w[a];
+      for (Index i = 0; i < n; ++i) x[i] -= z[i] * wa;
+    }
+  }
+
+  // backward error |b - S x|_inf / (|S|_inf |x|_inf + |b|_inf) at round-off level
+  bool accurate(const Eigen::Map<const Eigen::VectorXd>& b, const Eigen::Map<Eigen::VectorXd>& x) const {
+    if (!x.allFinite()) return false;
+    const Eigen::VectorXd r = b - S_ * x;  // column-major sparse times vector: serial in Eigen
+    const double scale = snorm_ * x.cwiseAbs().maxCoeff() + b.cwiseAbs().maxCoeff();
+    return r.cwiseAbs().maxCoeff() <= 1e-12 * scale;
+  }
+
+  SpMat S_, S0_;
+  Eigen::SimplicialLDLT<SpMat> ldlt_;
+  std::vector<Index> K_;
+  std::unordered_map<Index, Index> zcol_;
+  Eigen::MatrixXd Z_, M_;
+  Eigen::PartialPivLU<Eigen::MatrixXd> cap_;
+  double snorm_ = 0;  // |S|_inf
+  bool have_factor_ = false, shifted_ = false;
+  int factorizations_ = 0;
+};
+
+}  // namespace cmg
