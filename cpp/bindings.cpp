@@ -550,6 +550,13 @@ PYBIND11_MODULE(_core, m) {
     return triad_bytes_per_second(n, repeats) / 1e9;
   }, py::arg("n") = 40000000, py::arg("repeats") = 5, py::arg("threads") = 1,
   "GB/s of the triad a = b + 1.5 c over n doubles on `threads` threads (best of `repeats`; 24 bytes an entry)");
+  m.def("_fine_sweep_generic", [](py::object on) {
+    const bool old = fine_sweep_generic();
+    if (!on.is_none()) fine_sweep_generic() = on.cast<bool>();
+    return old;
+  }, py::arg("on") = py::none(),
+  "tests: every fine nonlinear sweep through the per-row path (True) or the range kernel where the level is stored "
+  "by colours (False, the default); returns the previous setting (None: only returns it)");
   m.def("anderson_iterates", [](DArr M, DArr c, DArr x0, int steps, int refuse_every, int threads) {
     const Index n = c.size(), m = M.ndim() == 2 ? M.shape(0) : 0;
     if (m < 1 || n % m != 0) throw InputError("M must be m x m with m dividing the length of c");

@@ -89,9 +89,15 @@ class ContactProblem {
   // pseudo-inverses), kept here.
   // (the lookup of a special row out of line, so that the common case inlines into the sweep)
   Mat<d> diagonal_inverse(Index i) const {
-    if (!special_row_[i]) return Mat<d>(A_.block(A_.diag[i])).inverse();
+    if (!(row_flags_[i] & kSpecialInverse)) return Mat<d>(A_.block(A_.diag[i])).inverse();
     return special_inverse(i);
   }
+  // What a row is, one byte each (the byte that said "special inverse" before; no more memory):
+  // the fine sweep's kernel (steps/nonlinear_gauss_seidel.hpp) takes the rows with no bit set --
+  // neither a contact node nor a special inverse, nearly all of them -- from this byte alone,
+  // without the contact lookup or the law's solve.
+  enum RowFlag : std::uint8_t { kSpecialInverse = 1, kContactRow = 2 };
+  const std::uint8_t* row_flags() const { return row_flags_.data(); }
   const std::vector<std::uint8_t>& base_mask() const { return base_mask_; }  // 0 on Dirichlet dofs (local)
   const std::vector<std::uint8_t>& fixed() const { return fixed_; }
   // The Dirichlet dofs (local numbering) and their values: a list, not a vector over all dofs.
@@ -124,7 +130,7 @@ class ContactProblem {
   double smoothing_omega() const { return omega_; }
   void set_smoothing_omega(double omega) { check_omega_range(omega); omega_ = omega; }
   std::size_t memory_bytes() const {
-    return A_.memory_bytes() + sizeof(double) * (f_.size() + gap_.size() * 3 + fixed_dof_values_.size()) + special_row_.size() +
+    return A_.memory_bytes() + sizeof(double) * (f_.size() + gap_.size() * 3 + fixed_dof_values_.size()) + row_flags_.size() +
            sizeof(special_[0]) * special_.size() +
            sizeof(Index) * (fixed_dofs_.size() + node_.size()) + sizeof(ColIndex) * contact_of_node_.size() + fixed_.size() +
            base_mask_.size();
@@ -144,7 +150,8 @@ class ContactProblem {
   void keep_special_inverses() {
     const Index n = A_.rows;
     const double thr = 1e-12 * max_diagonal<d>(A_);
-    special_row_.assign(n, 0);
+    row_flags_.assign(n, 0);
+    for (Index i : node_) row_flags_[i] |= kContactRow;
     special_.clear();
     std::uint8_t inert[d];
     for (Index i = 0; i < n; ++i) {
@@ -152,7 +159,7 @@ class ContactProblem {
       bool plain = A_.diag[i] >= 0;
       for (int c = 0; c < d; ++c) plain = plain && !inert[c];
       if (plain) plain = M == Mat<d>(A_.block(A_.diag[i])).inverse();
-      if (!plain) { special_row_[i] = 1; special_.emplace_back(i, M); }
+      if (!plain) { row_flags_[i] |= kSpecialInverse; special_.emplace_back(i, M); }
     }
   }
 
@@ -185,7 +192,7 @@ class ContactProblem {
   BlockMatrix<d> A_;
   BasisTransform<d> T_;
   std::vector<double> f_, fixed_dof_values_;
-  std::vector<std::uint8_t> special_row_;         // 1: the row's inverse is in special_
+  std::vector<std::uint8_t> row_flags_;           // RowFlag bits; kSpecialInverse: the row's inverse is in special_
   std::vector<std::pair<Index, Mat<d>>> special_;  // ascending rows
   std::vector<Index> fixed_dofs_;
   std::vector<std::uint8_t> fixed_, base_mask_;

@@ -111,6 +111,19 @@ class SweepOrder {
     for (Index ii = 0; ii < m; ++ii) f(rows_[forward ? ii : m - 1 - ii]);
   }
 
+  // f(b, e) over contiguous ranges of rows, for a level stored by colours (contiguous()): the
+  // colours in order or reversed, each colour's range split over the threads (f must touch rows
+  // [b, e) only; within a range the rows ascend). The fine sweep's kernel runs on these.
+  template <class F>
+  void visit_ranges(bool forward, F&& f) const {
+    const Index nc = num_colours();
+    for (Index cc = 0; cc < nc; ++cc) {
+      const Index c = forward ? cc : nc - 1 - cc;
+      const Index b = colour_ptr_[c];
+      parallel_ranges(colour_ptr_[c + 1] - b, [&](Index lo, Index hi) { f(b + lo, b + hi); }, 1024);
+    }
+  }
+
   void check(Index n) const {
     for (Index i : rows_)
       if (i < 0 || i >= n) throw InputError("a row to smooth (" + std::to_string(i) + ") is outside 0.." + std::to_string(n - 1));

@@ -99,6 +99,7 @@ class MonotoneMultigridStep {
     // Au += A (u - u_old) and e = |u - u_old|_A^2 in one pass (were four: difference, product,
     // update, dot); sums over fixed chunks of rows, so the same on any thread count
     const double e = parallel_sum(A.rows, [&](Index i) {
+      A.prefetch_ahead(i, u.data(), old_.data());  // two gathers a block (block_matrix.hpp says why)
       Vec<d> y = Vec<d>::Zero();
       accumulate_block_differences<d>(A.values.data(), A.indices.data(), A.indptr[i], A.indptr[i + 1], u.data(), old_.data(), y.data());
       VecMap<d>(it_.Au.data() + d * i) += y;
@@ -175,6 +176,7 @@ class MonotoneMultigridStep {
   double change_norm(const std::vector<double>& x, const std::vector<double>& y) const {
     const BlockMatrix<d>& A = P_.matrix();
     const double e = parallel_sum(A.rows, [&](Index i) {
+      A.prefetch_ahead(i, y.data(), x.data());
       Vec<d> z = Vec<d>::Zero();
       accumulate_block_differences<d>(A.values.data(), A.indices.data(), A.indptr[i], A.indptr[i + 1], y.data(), x.data(), z.data());
       return (CVecMap<d>(y.data() + d * i) - CVecMap<d>(x.data() + d * i)).dot(z);

@@ -8,24 +8,91 @@
 
 namespace cmg {
 
+// Tests and diagnostics: when set, every fine sweep takes the per-row path (row_update) instead of
+// the range kernel; the two must agree bit for bit (tests/test_fine_sweep_kernel.py).
+inline bool& fine_sweep_generic() {
+  static bool generic = false;
+  return generic;
+}
+
 template <int d, class L>
 struct NonlinearGaussSeidel {
   static void sweep(const ContactProblem<d>& P, double* u, bool forward, const SweepOrder& order = SweepOrder()) {
-    const BlockMatrix<d>& A = P.matrix();
-    const double* f = P.load().data();
-    const double omega = P.smoothing_omega();
-    order.visit(A.rows, forward, [&](Index i) {
-      const Vec<d> b = local_rhs<d>(A, u, f, i);
-      VecMap<d> ui(u + d * i);
-      const Index c = L::has_contact ? P.contact_of_node(i) : -1;
-      if (c < 0) {
-        relaxed_assign<d>(ui, P.diagonal_inverse(i) * b, omega);
-        return;
-      }
-      const Mat<d> B = A.block(A.diag[i]);
-      ui = L::template solve<d>(B, b, P.node(c), Vec<d>(ui));
-    });
+    if (order.contiguous() && !fine_sweep_generic()) {
+      order.visit_ranges(forward, [&](Index b, Index e) { sweep_range(P, u, b, e); });
+      return;
+    }
+    order.visit(P.matrix().rows, forward, [&](Index i) { row_update(P, u, i); });
   }
+
+  // Row i, whatever it is: the law's nodal solve at a contact node, the diagonal block's inverse
+  // (a special one where kept) elsewhere.
+  static void row_update(const ContactProblem<d>& P, double* u, Index i) {
+    const BlockMatrix<d>& A = P.matrix();
+    const Vec<d> b = local_rhs<d>(A, u, P.load().data(), i);
+    VecMap<d> ui(u + d * i);
+    const Index c = L::has_contact ? P.contact_of_node(i) : -1;
+    if (c < 0) {
+      relaxed_assign<d>(ui, P.diagonal_inverse(i) * b, P.smoothing_omega());
+      return;
+    }
+    const Mat<d> B = A.block(A.diag[i]);
+    ui = L::template solve<d>(B, b, P.node(c), Vec<d>(ui));
+  }
+
+  // The rows [b, e) of one colour (a level stored by colours). Nearly every row is neither a contact
+  // node nor one with a special inverse: those run in this loop, with the matrix arrays in
+  // registers, one flag byte read per row, the inverse formed inline and x prefetched at the
+  // columns of the row kPrefetchRows ahead (the neighbours' x are in other colours' ranges: their
+  // loads stalled the sweep, issue 15). The rest go through row_update, out of line. The same
+  // sums and products in the same order as row_update: the same bits (the test above).
+  static void sweep_range(const ContactProblem<d>& P, double* u, Index b, Index e) {
+    using CP = ContactProblem<d>;
+    const BlockMatrix<d>& A = P.matrix();
+    const double* values = A.values.data();
+    const ColIndex* cols = A.indices.data();
+    const Index* ptr = A.indptr.data();
+    const Index* diag = A.diag.data();
+    const double* f = P.load().data();
+    const std::uint8_t* flags = P.row_flags();
+    // law::Linear has no contact rows: its contact nodes only carry frames (row_update's c < 0)
+    const std::uint8_t other = L::has_contact ? (CP::kSpecialInverse | CP::kContactRow) : CP::kSpecialInverse;
+    const double omega = P.smoothing_omega();
+    const Index n = A.rows;
+    for (Index i = b; i < e; ++i) {
+      if (i + kPrefetchRows < n) prefetch_block_columns<d>(cols, ptr[i + kPrefetchRows], ptr[i + kPrefetchRows + 1], u);
+      if (flags[i] & other) {
+        other_row(P, u, i);
+        continue;
+      }
+      const Index kd = diag[i];  // >= 0: a row without a diagonal block has a special inverse
+      Vec<d> s = CVecMap<d>(f + d * i);
+      accumulate_blocks<d, true>(values, cols, ptr[i], kd, u, s.data());
+      accumulate_blocks<d, true>(values, cols, kd + 1, ptr[i + 1], u, s.data());
+      const Mat<d> inv = Mat<d>(CMatMap<d>(values + kd * d * d)).inverse();  // ContactProblem::diagonal_inverse's
+      relaxed_block_solve(inv, s.data(), u + d * i, omega);
+    }
+  }
+
+ private:
+  // x <- x + omega (inv s - x) (relaxed_assign of inv * s) on scalars: Eigen's product summed each
+  // row into a stack slot and read the two back as one 16-byte load -- a store-forwarding stall a
+  // row, the hottest instruction of the kernel in perf annotate. The same products and sums in the
+  // same order: the same bits.
+  static void relaxed_block_solve(const Mat<d>& inv, const double* s, double* x, double omega) {
+    double y[d];
+    for (int a = 0; a < d; ++a) {
+      double t = inv(a, 0) * s[0];
+      for (int c = 1; c < d; ++c) t += inv(a, c) * s[c];
+      y[a] = t;
+    }
+    if (omega == 1.0)
+      for (int a = 0; a < d; ++a) x[a] = y[a];
+    else
+      for (int a = 0; a < d; ++a) x[a] += omega * (y[a] - x[a]);
+  }
+
+  __attribute__((noinline)) static void other_row(const ContactProblem<d>& P, double* u, Index i) { row_update(P, u, i); }
 };
 
 }  // namespace cmg
