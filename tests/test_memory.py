@@ -178,3 +178,18 @@ def test_the_stiffness_pattern_is_every_pair_of_nodes_sharing_a_cell(make):
     indptr, indices = np.asarray(A.indptr), np.asarray(A.indices)
     assert np.array_equal(indptr, np.r_[0, np.cumsum(np.bincount(rows, minlength=m.num_points))])
     assert np.array_equal(indices, cols)
+
+
+def test_the_estimators_edge_keys_do_not_overflow_with_32_bit_ids():
+    """Refined meshes hold int32 ids; the estimator's edge keys i * n + j must still be exact past
+    n = 46,341 nodes (the adaptive Hertz level 11 has 232k): every pair is found at its own edge."""
+    from contactmg.estimator import _edge_ids
+    n = 300_000
+    rng = np.random.default_rng(3)
+    a = rng.integers(0, n, 2000)
+    b = rng.integers(0, n, 2000)
+    keep = a != b
+    pairs = np.stack([a[keep], b[keep]], axis=1).astype(np.int32)
+    edges = np.unique(np.sort(pairs, axis=1), axis=0).astype(np.int32)
+    idx = _edge_ids(edges, pairs[:, ::-1], n)
+    np.testing.assert_array_equal(edges[idx], np.sort(pairs, axis=1))

@@ -138,13 +138,17 @@ def _local_edges(cell_type: str) -> np.ndarray:
 
 
 def _edges(mesh: Mesh) -> np.ndarray:
-    e = np.sort(mesh.cells[:, _local_edges(mesh.cell_type)].reshape(-1, 2), axis=1)
+    # 64-bit: refined meshes hold 32-bit ids, and the keys below are i * n + j
+    e = np.sort(np.asarray(mesh.cells, dtype=np.int64)[:, _local_edges(mesh.cell_type)].reshape(-1, 2), axis=1)
     return np.unique(e, axis=0)
 
 
 def _edge_ids(edges: np.ndarray, pairs: np.ndarray, n: int) -> np.ndarray:
+    # i * n + j overflows 32 bits from n = 46,341 nodes on: the keys are built in 64 bits
+    edges = np.asarray(edges, dtype=np.int64)
+    n = int(n)
     keys = edges[:, 0] * n + edges[:, 1]
-    p = np.sort(pairs, axis=1)
+    p = np.sort(np.asarray(pairs, dtype=np.int64), axis=1)
     q = p[:, 0] * n + p[:, 1]
     idx = np.searchsorted(keys, q)
     if np.any(idx >= len(keys)) or np.any(keys[np.minimum(idx, len(keys) - 1)] != q):
