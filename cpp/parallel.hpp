@@ -94,25 +94,6 @@ inline void parallel_for(Index n, F&& f, Index grain = kParallelGrain) {
 #endif
 }
 
-// f(b, e) over [0, n) as one contiguous range per thread (one range below `grain` items): a
-// kernel then loops over its range itself, with no call per item, and can prefetch ahead in it.
-// The items must be independent, as for parallel_for (the split does not change a result).
-template <class F>
-inline void parallel_ranges(Index n, F&& f, Index grain = kParallelGrain) {
-#ifdef CONTACTMG_OPENMP
-  if (n >= grain && omp_get_max_threads() > 1) {
-#pragma omp parallel
-    {
-      const Index t = omp_get_thread_num(), T = omp_get_num_threads();
-      const Index b = n * t / T, e = n * (t + 1) / T;
-      if (b < e) f(b, e);
-    }
-    return;
-  }
-#endif
-  if (n > 0) f(Index(0), n);
-}
-
 // sum_i f(i) over [0, n): partial sums over chunks of a fixed length (not per thread), added in
 // chunk order, so the value is the same bit for bit on any thread count.
 template <class F>

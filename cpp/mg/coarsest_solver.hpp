@@ -113,7 +113,7 @@ class CoarsestSolver {
     for (Index j = 0; j < D.outerSize(); ++j)
       for (SpMat::InnerIterator it(D, j); it; ++it)
         if (it.value() != 0 && !in[it.row()]) { in[it.row()] = 1; rows.push_back(it.row()); }
-    if (max_rank() == 0 || (Index)rows.size() > max_rank()) return false;
+    if ((Index)rows.size() > max_rank()) return false;
     std::sort(rows.begin(), rows.end());
     K_ = rows;
     if (K_.empty()) return true;  // S == S0: plain solves

@@ -113,14 +113,31 @@ class SweepOrder {
 
   // f(b, e) over contiguous ranges of rows, for a level stored by colours (contiguous()): the
   // colours in order or reversed, each colour's range split over the threads (f must touch rows
-  // [b, e) only; within a range the rows ascend). The fine sweep's kernel runs on these.
+  // [b, e) only; within a range the rows ascend). The fine sweep's kernel runs on these. One
+  // parallel region per sweep with a barrier between colours, and the same size rule, as visit().
   template <class F>
   void visit_ranges(bool forward, F&& f) const {
     const Index nc = num_colours();
+#ifdef CONTACTMG_OPENMP
+    const Index total = colour_ptr_.back() - colour_ptr_.front();
+    if (total >= parallel_grains().colour * nc && team_size() > 1) {
+#pragma omp parallel
+      {
+        const Index t = omp_get_thread_num(), T = omp_get_num_threads();
+        for (Index cc = 0; cc < nc; ++cc) {
+          const Index c = forward ? cc : nc - 1 - cc;
+          const Index b = colour_ptr_[c], m = colour_ptr_[c + 1] - b;
+          const Index lo = m * t / T, hi = m * (t + 1) / T;
+          if (lo < hi) f(b + lo, b + hi);
+#pragma omp barrier
+        }
+      }
+      return;
+    }
+#endif
     for (Index cc = 0; cc < nc; ++cc) {
       const Index c = forward ? cc : nc - 1 - cc;
-      const Index b = colour_ptr_[c];
-      parallel_ranges(colour_ptr_[c + 1] - b, [&](Index lo, Index hi) { f(b + lo, b + hi); }, 1024);
+      if (colour_ptr_[c] < colour_ptr_[c + 1]) f(colour_ptr_[c], colour_ptr_[c + 1]);
     }
   }
 
