@@ -4,7 +4,9 @@
 // gradient and Hessian). A law (frictionless.hpp, tresca.hpp, coulomb.hpp) supplies the exact nodal
 // solve and the bound s_p; nothing outside the laws asks which law it is.
 #pragma once
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include "laws/nodal_solve.hpp"
 
 namespace cmg {
@@ -57,15 +59,29 @@ double free_tangential_norm(const double* u, TangentMask free) {
 
 // Hessian of s |u_T| at a sliding node, s (I - t t^T) / |u_T| with t = u_T / |u_T| on the free
 // tangential components. With one free tangential direction (2D, or 3D with one fixed) it is zero.
+//
+// Its curvature s / |u_T| is capped at stiffness / sqrt(eps), stiffness the node's own tangential
+// stiffness (largest tangential diagonal entry of its block): a node that only just slides (a load
+// step's slip increment at round-off, 1e-17) had s / |u_T| = 1e17 against elastic entries of 1e2,
+// and the coarse matrices, updated incrementally by - H_old + H_new, kept the elastic entries only
+// to +-10: an indefinite coarsest matrix (the 8-layer cork pulled back, refused as "singular").
+// Below the cap a removed Hessian leaves at least half the digits of the elastic entries. The cap
+// changes the coarse problem's model only where it already holds the node's perpendicular motion
+// to 1e-8 of its unconstrained size; the fine smoother, which decides the solution, has no cap.
 template <int d>
-Mat<d> friction_hessian(double s, const double* u, TangentMask free) {
+Mat<d> friction_hessian(double s, const double* u, TangentMask free, double stiffness = kInf) {
   Mat<d> H = Mat<d>::Zero();
   int nfree = 0;
   for (int a = 1; a < d; ++a) nfree += free >> (a - 1) & 1u;
   const double ut = free_tangential_norm<d>(u, free);
   if (nfree < 2 || !(s > 0) || ut == 0) return H;
+  const double cap = stiffness / std::sqrt(std::numeric_limits<double>::epsilon());
+  const bool capped = s / ut > cap;
   for (int a = 1; a < d; ++a)
-    for (int b = 1; b < d; ++b) H(a, b) = s * ((a == b ? 1.0 : 0.0) - u[a] * u[b] / (ut * ut)) / ut;
+    for (int b = 1; b < d; ++b) {
+      const double t = (a == b ? 1.0 : 0.0) - u[a] * u[b] / (ut * ut);
+      H(a, b) = capped ? cap * t : s * t / ut;
+    }
   return H;
 }
 
@@ -89,11 +105,11 @@ NodeState node_state(const ContactNode& p, const double* u) {
 // The smooth neighbourhood of the smoothed iterate at one node: truncation mask (active normal,
 // sticking tangentials; `base` keeps the Dirichlet dofs truncated), correction bounds (inactive
 // normal, sign of sliding tangentials) and the friction gradient of a sliding node added to the
-// residual r (r = f - A u on entry). Its Hessian goes to *hessian (left zero where there is none).
-// Returns whether a bound is finite.
+// residual r (r = f - A u on entry). Its Hessian goes to *hessian (left zero where there is none;
+// B the node's diagonal block, for the Hessian's cap). Returns whether a bound is finite.
 template <class L, int d>
 bool linearize_node(const ContactNode& p, const double* u, double* r, std::uint8_t* mask, const std::uint8_t* base,
-                    double* lo, double* hi, Mat<d>* hessian) {
+                    double* lo, double* hi, Mat<d>* hessian, const Mat<d>& B) {
   bool bounded = false;
   for (int a = 0; a < d; ++a) { mask[a] = base[a]; lo[a] = -kInf; hi[a] = kInf; }
   const bool active = u[0] >= p.gap;
@@ -115,7 +131,11 @@ bool linearize_node(const ContactNode& p, const double* u, double* r, std::uint8
     else if (v[a] < 0) { hi[a] = -v[a]; bounded = true; }
   }
   if constexpr (d == 3)
-    if (hessian) *hessian = friction_hessian<d>(s, v.data(), p.free);
+    if (hessian) {
+      double stiffness = 0;
+      for (int a = 1; a < d; ++a) stiffness = std::max(stiffness, B(a, a));
+      *hessian = friction_hessian<d>(s, v.data(), p.free, stiffness);
+    }
   return bounded;
 }
 

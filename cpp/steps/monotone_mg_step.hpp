@@ -165,7 +165,7 @@ class MonotoneMultigridStep {
       const Index i = P_.contact_node(c), k = i * d;
       Mat<d> Hc = Mat<d>::Zero();
       if (linearize_node<L, d>(P_.node(c), it_.u.data() + k, r_.data() + k, mask_.data() + k, base.data() + k, lo_.data() + c * d,
-                               hi_.data() + c * d, &Hc))
+                               hi_.data() + c * d, &Hc, P_.matrix().block(P_.matrix().diag[i])))
         bounded = true;
       if (!Hc.isZero(0.0)) hessian_.emplace_back(i, Hc);
     }

@@ -106,7 +106,7 @@ class TnnmgStep {
       s_[c] = L::bound(p, it_.u[k] >= p.gap, r_[k]);
       Mat<d> Hc = Mat<d>::Zero();
       linearize_node<L, d>(p, it_.u.data() + k, r_.data() + k, mask_.data() + k, base.data() + k, lo_.data() + k,
-                           hi_.data() + k, &Hc);
+                           hi_.data() + k, &Hc, P_.matrix().block(P_.matrix().diag[i]));
       if (!Hc.isZero(0.0)) hessian_.emplace_back(i, Hc);
     }
   }
