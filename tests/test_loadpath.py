@@ -246,6 +246,31 @@ def test_cli_cork_push_and_pull_back_dissipates():
     assert r.returncode == 2 and "--pull-back" in r.stderr.strip().splitlines()[-1]
 
 
+def test_cork_on_eight_axial_layers_pushed_and_pulled_back():
+    """The finer coarse mesh of the cork (8 axial layers) on the push-and-pull-back path: it used
+    to stop with "the coarsest-level matrix is singular" (newly sliding nodes with a tiny slip
+    increment); every step now converges to a state that meets Coulomb's law on the increment,
+    and the way back takes less force than the way in at the same plunger position."""
+    from contactmg import cork
+    from contactmg.generators_3d import CORK_TOP
+
+    p = cork.cork_problem(2, F, cork.PUSH, axial_layers=8)
+    res = two_phase_path(p, [CORK_TOP], (0.0, 0.0, -cork.PUSH), 2, (0.0, 0.0, cork.PUSH), 2).solve(tol=1e-11)
+    assert res.converged and len(res.steps) == 4
+    for r in res.steps:
+        s, inc = r.contact_state, r.extra["slip_increment"]
+        n, t = np.abs(r.contact_force[:, 0]), r.contact_force[:, 1:]
+        scale = n.max()
+        # zero up to the round-off of the rotated frames on the conical neck
+        assert np.abs(inc[s == STICK]).max(initial=0.0) <= 1e-12 * np.abs(r.displacement).max()
+        assert np.all(np.linalg.norm(t[s == STICK], axis=1) <= F * n[s == STICK] + 1e-9 * scale)
+        slip = s == SLIP
+        unit = inc[slip] / np.linalg.norm(inc[slip], axis=1)[:, None]
+        assert np.abs(t[slip] + F * n[slip][:, None] * unit).max(initial=0.0) <= 1e-8 * scale
+    force = [cork.push_force(p, r) for r in res.steps]
+    assert 0 < force[0] < force[1] and force[2] < force[0]
+
+
 def test_fixed_point_path_reaches_the_nmg_path():
     """Algorithm 1 on the same incremental steps (Tresca solves with the bound of the previous
     outer iterate, friction on the increment) reaches the steps of Algorithm 2 (F = 0.4: unique)."""

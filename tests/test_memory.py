@@ -193,3 +193,28 @@ def test_the_estimators_edge_keys_do_not_overflow_with_32_bit_ids():
     edges = np.unique(np.sort(pairs, axis=1), axis=0).astype(np.int32)
     idx = _edge_ids(edges, pairs[:, ::-1], n)
     np.testing.assert_array_equal(edges[idx], np.sort(pairs, axis=1))
+
+
+_PEAK = """
+import json, resource, sys
+from contactmg.hertz import hertz_problem
+from contactmg.hierarchy import estimate_memory_bytes
+from contactmg.sphere import sphere_problem
+cell, levels = sys.argv[1], int(sys.argv[2])
+p = (sphere_problem(cell, levels, 0.4) if cell in ("tetra", "hexahedron") else hertz_problem(cell, levels, 0.4))
+r = p.solve("nmg")
+coarse = p.hierarchy.meshes[0]
+print(json.dumps(dict(converged=bool(r.converged), peak=resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024,
+                      estimate=estimate_memory_bytes(coarse, p.hierarchy.levels))))
+"""
+
+
+@pytest.mark.parametrize("cell, levels", [("triangle", 7), ("quad", 6), ("tetra", 3), ("hexahedron", 3)])
+def test_the_memory_estimate_covers_the_peak_of_a_solve(cell, levels):
+    """MeshHierarchy.build refuses a run whose estimate does not fit before allocating anything:
+    the estimate must cover the whole process's peak of a solve that keeps its hierarchy (in a
+    fresh interpreter, so nothing of this one counts)."""
+    out = subprocess.run([sys.executable, "-c", _PEAK, cell, str(levels)], capture_output=True, text=True, check=True)
+    got = json.loads(out.stdout)
+    assert got["converged"]
+    assert got["peak"] <= got["estimate"], got

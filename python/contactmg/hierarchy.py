@@ -14,9 +14,21 @@ from .mesh import Mesh
 
 Projector = Callable[[np.ndarray, np.ndarray], np.ndarray]
 
-# Rough bytes per fine node for a 2D solve (fine matrix in the solver and in Python, coarse matrices,
-# prolongations, meshes, work vectors), measured on P1/Q1 hierarchies; 3D needs about 6x more.
-_BYTES_PER_NODE = {2: 2200, 3: 14000}
+# Bytes per fine node of a whole solve (fine matrix in the solver and in Python, coarse matrices,
+# prolongations, meshes, work vectors, results), by cell type: the peak resident memory of a Python
+# solve that keeps its hierarchy (release_hierarchy off), measured at stop 21 on Hertz triangles /
+# quadrilaterals level 8 and sphere tetrahedra / hexahedra level 4 (909 / 891 / 2,065 / 3,181 B a
+# node with the interpreter's ~70 MB), times 1.5 for what a problem of another shape holds more.
+# It was 2,200 in 2D and 14,000 in 3D, 4.5x the measured 3D peak: it refused tetrahedral level 5
+# (8.1M dofs, about 6 GB) on a 24 GB machine.
+# Plus the interpreter, numpy, matplotlib's import and the core: _BASE_BYTES.
+_BYTES_PER_NODE = {"triangle": 1400, "quad": 1400, "tetra": 3200, "hexahedron": 4800}
+_BASE_BYTES = 150 * 2**20
+
+
+def bytes_per_node(mesh: Mesh) -> int:
+    """The memory estimate's bytes per fine node for this mesh's cell type."""
+    return _BYTES_PER_NODE[mesh.cell_type]
 
 
 @dataclass
@@ -84,7 +96,8 @@ def estimate_nodes(mesh: Mesh, levels: int) -> int:
 
 
 def estimate_memory_bytes(mesh: Mesh, levels: int) -> int:
-    return estimate_nodes(mesh, levels) * _BYTES_PER_NODE[mesh.dim]
+    """Peak resident bytes a solve on `levels` uniform levels of `mesh` is estimated to need."""
+    return _BASE_BYTES + estimate_nodes(mesh, levels) * bytes_per_node(mesh)
 
 
 class MeshHierarchy:
@@ -266,7 +279,7 @@ class MeshHierarchy:
             if level == levels and not estimate_finest:
                 break
             m = h.finest
-            need = (4 if m.dim == 2 else 8) * m.num_points * _BYTES_PER_NODE[m.dim]
+            need = _BASE_BYTES + (4 if m.dim == 2 else 8) * m.num_points * bytes_per_node(m)
             have = available_memory_bytes()
             if need > memory_fraction * have:
                 raise MemoryError(f"estimating level {level} needs about {need / 2**30:.1f} GiB, more than "
