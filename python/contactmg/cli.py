@@ -177,6 +177,16 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def peak_rss_mb() -> float:
+    """Peak resident memory of this process in MB: VmHWM of its own address space where Linux
+    tells it (ru_maxrss keeps the parent's peak across fork and exec: a command started from a
+    large Python process reported that process's memory), else ru_maxrss."""
+    try:
+        with open("/proc/self/status") as fh:
+            for line in fh:
+                if line.startswith("VmHWM:"):
+                    return int(line.split()[1]) / 1024.0
+    except OSError:
+        pass
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
 
 
