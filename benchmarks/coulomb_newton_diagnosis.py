@@ -27,6 +27,9 @@ Modes:
   newton        the whole problem by this Newton from --start (default: 40 cycles of Algorithm 2),
                 then Algorithm 2 from Newton's result.
   continuation  Algorithm 2 at each F of --frictions from the previous F's solution.
+  rate          Algorithm 2 (tol 1e-30, --steps cycles) from --start scaled by 1 - 1e-6 (a solution,
+                e.g. Newton's saved by `newton --save`): the contraction of the cycle map near the
+                solution, contact state fixed; and from --start unscaled (round-off only).
 Measured 2026-12-03 (branch adapt4, idle machine except another engineer's benchmarks;
 docs/history/adaptive.md, "Issue 11, fourth part"): see there for the numbers.
 """
@@ -158,7 +161,7 @@ def main():
     from contactmg.checks import contact_conditions
 
     ap = argparse.ArgumentParser()
-    ap.add_argument("mode", choices=["line", "alternate", "newton", "continuation"])
+    ap.add_argument("mode", choices=["line", "alternate", "newton", "continuation", "rate"])
     ap.add_argument("--level", type=int, default=11)
     ap.add_argument("--friction", type=float, default=40.0)
     ap.add_argument("--frictions", type=float, nargs="+", default=[8, 12, 16, 20, 25, 32, 40])
@@ -183,6 +186,20 @@ def main():
             if r.converged:
                 u = np.asarray(r.displacement).copy()
         out["runs"] = rows
+    elif a.mode == "rate":
+        F = a.friction
+        p = hertz_problem_on(H, F)
+        u0 = np.load(a.start).reshape(-1, 2)
+        out["F"] = F
+        for name, start in (("perturbed", u0 * (1 - 1e-6)), ("exact", u0)):
+            recs = []
+            p.solve("nmg", tol=1e-30, max_cycles=a.steps, threads=1, u0=start, progress=lambda rec: recs.append(rec))
+            c = [float(x["correction_norm"]) for x in recs]
+            states = sorted({(x["active"], x["stick"], x["slip"]) for x in recs})
+            rate = (c[-1] / c[9]) ** (1 / (len(c) - 10)) if len(c) > 10 and c[9] > 0 else float("nan")
+            print(f"{name}: corrections " + " ".join(f"{v:.1e}" for v in c) + f"\n  states {states}, "
+                  f"rate per cycle over cycles 10-{len(c)}: {rate:.3f}", flush=True)
+            out[name] = {"corrections": c, "states": states, "rate": rate}
     else:
         F = a.friction
         out["F"] = F
