@@ -3,7 +3,7 @@ ten paper coefficients, spread <= 4 cycles), every result checked by contactmg.c
 
     python benchmarks/adaptive_coulomb_levels.py [--levels 3 5 7 9 11] [--frictions ...]
         [--max-cycles 200] [--jobs 2] [--json benchmarks/results/adaptive_coulomb_levels.json]
-        [--label after]
+        [--label after] [--hierarchy adaptive|uniform]
 
 The hierarchy is hertz_adaptive_hierarchy(11, 0.4) (the one of `contactmg table1`), cached in
 out/cache/hertz_adaptive_11.pkl by benchmarks/cycle_growth.py. Each run: F(3,3), tol 1e-11, from
@@ -24,8 +24,11 @@ PAPER = [0.08, 0.4, 0.7, 0.9, 1.0, 1.1, 2.0, 5.0, 8.0, 40.0]
 _H = None
 
 
-def _init():
+def _init(kind="adaptive"):
     global _H
+    if kind == "uniform":
+        _H = "uniform"  # hertz_problem builds the uniform hierarchy of each level
+        return
     from cycle_growth import adaptive_hierarchy
     _H = adaptive_hierarchy(11)
 
@@ -34,7 +37,7 @@ def run(L, F, max_cycles):
     from contactmg.checks import contact_conditions
     from contactmg.hertz import hertz_problem
 
-    p = hertz_problem("triangle", L, F, coulomb_at_zero=True, hierarchy=_H.truncated(L))
+    p = hertz_problem("triangle", L, F, coulomb_at_zero=True, hierarchy="uniform" if _H == "uniform" else _H.truncated(L))
     t = time.perf_counter()
     r = p.solve("nmg", tol=1e-11, max_cycles=max_cycles, threads=1)
     sec = time.perf_counter() - t
@@ -51,11 +54,12 @@ def main():
     ap.add_argument("--max-cycles", type=int, default=200)
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--label", default="")
+    ap.add_argument("--hierarchy", choices=["adaptive", "uniform"], default="adaptive")
     ap.add_argument("--json")
     a = ap.parse_args()
     tasks = sorted(((L, F) for L in a.levels for F in a.frictions), key=lambda t: (-t[0], -t[1]))
     rows = []
-    with ProcessPoolExecutor(a.jobs, initializer=_init) as pool:
+    with ProcessPoolExecutor(a.jobs, initializer=_init, initargs=(a.hierarchy,)) as pool:
         futs = [pool.submit(run, L, F, a.max_cycles) for L, F in tasks]
         for f in as_completed(futs):
             r = f.result()
@@ -76,7 +80,7 @@ def main():
     if a.json:
         os.makedirs(os.path.dirname(a.json) or ".", exist_ok=True)
         with open(a.json, "w") as fh:
-            json.dump({"label": a.label, "levels": a.levels, "frictions": a.frictions, "runs": rows}, fh, indent=1)
+            json.dump({"label": a.label, "hierarchy": a.hierarchy, "levels": a.levels, "frictions": a.frictions, "runs": rows}, fh, indent=1)
 
 
 if __name__ == "__main__":
