@@ -20,9 +20,15 @@ inline void check_block_count(Index n) {
 // of memory latency ahead; 4-32 measured alike on the level-9 Hertz matrix.
 constexpr Index kPrefetchRows = 8;
 
+// The prefetch helpers are forced inline: a function holding nothing but __builtin_prefetch has no
+// side effect in GCC's eyes (IPA pure-const), so where it was not inlined GCC 12 deleted the call
+// itself -- the residual, the product and the norm passes of main prefetched nothing (issue 15;
+// 48 prefetch instructions in the whole module, all in the fine sweep's inlined kernel).
+#define CMG_PREFETCH_INLINE inline __attribute__((always_inline))
+
 // Prefetch x at the block columns k in [b, e) (a hint: no result depends on it).
 template <int d>
-inline void prefetch_block_columns(const ColIndex* indices, Index b, Index e, const double* x) {
+CMG_PREFETCH_INLINE void prefetch_block_columns(const ColIndex* indices, Index b, Index e, const double* x) {
   for (Index k = b; k < e; ++k) __builtin_prefetch(x + d * (Index)indices[k]);
 }
 
@@ -98,12 +104,12 @@ struct BlockMatrix {
   }
 
   // x at the columns of row i + kPrefetchRows (if there is one) into the cache
-  void prefetch_ahead(Index i, const double* x) const {
+  CMG_PREFETCH_INLINE void prefetch_ahead(Index i, const double* x) const {
     if (i + kPrefetchRows < rows) prefetch_block_columns<d>(indices.data(), indptr[i + kPrefetchRows], indptr[i + kPrefetchRows + 1], x);
   }
 
   // ... and z too (the passes over a difference x - z)
-  void prefetch_ahead(Index i, const double* x, const double* z) const {
+  CMG_PREFETCH_INLINE void prefetch_ahead(Index i, const double* x, const double* z) const {
     if (i + kPrefetchRows >= rows) return;
     for (Index k = indptr[i + kPrefetchRows]; k < indptr[i + kPrefetchRows + 1]; ++k) {
       __builtin_prefetch(x + d * (Index)indices[k]);
