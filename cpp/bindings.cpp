@@ -557,6 +557,14 @@ PYBIND11_MODULE(_core, m) {
   }, py::arg("on") = py::none(),
   "tests: every fine nonlinear sweep through the per-row path (True) or the range kernel where the level is stored "
   "by colours (False, the default); returns the previous setting (None: only returns it)");
+  m.def("_locality_order", [](py::object on) {
+    const bool old = locality_order_enabled();
+    if (!on.is_none()) locality_order_enabled() = on.cast<bool>();
+    return old;
+  }, py::arg("on") = py::none(),
+  "tests and benchmarks: solvers built from now on colour (and store by colours) every level in its locality "
+  "order (True, the default) or in the user's numbering (False, as before issue 15's locality order); returns the "
+  "previous setting (None: only returns it)");
   m.def("anderson_iterates", [](DArr M, DArr c, DArr x0, int steps, int refuse_every, int threads) {
     const Index n = c.size(), m = M.ndim() == 2 ? M.shape(0) : 0;
     if (m < 1 || n % m != 0) throw InputError("M must be m x m with m dividing the length of c");
