@@ -557,6 +557,13 @@ PYBIND11_MODULE(_core, m) {
   }, py::arg("on") = py::none(),
   "tests: every fine nonlinear sweep through the per-row path (True) or the range kernel where the level is stored "
   "by colours (False, the default); returns the previous setting (None: only returns it)");
+  m.def("_level_sweep_generic", [](py::object on) {
+    const bool old = level_sweep_generic();
+    if (!on.is_none()) level_sweep_generic() = on.cast<bool>();
+    return old;
+  }, py::arg("on") = py::none(),
+  "tests: every coarse (projected or block) sweep through the per-row path (True) or the range kernel where the level "
+  "is stored by colours (False, the default); returns the previous setting (None: only returns it)");
   m.def("_locality_order", [](py::object on) {
     const bool old = locality_order_enabled();
     if (!on.is_none()) locality_order_enabled() = on.cast<bool>();
