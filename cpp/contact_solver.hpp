@@ -205,22 +205,22 @@ class ContactSolver {
       }
       order.resize(P.size() + 1);
       if (renumber) {
-        // coloured greedily in the locality order (renumbering.hpp), each colour stored in it;
-        // rank: the locality position of each stored row of the level just renumbered
+        // each colour stored in the level's locality order (renumbering.hpp); rank: the locality
+        // position of each stored row of the level just renumbered
         const bool local = locality_order_enabled();
-        std::vector<Index> visit, rank;
-        if (local) visit = reverse_cuthill_mckee<d>(A);
-        order.back() = Renumbering::by_colours<d>(A, visit);
-        if (local) rank = stored_rank(visit, order.back());
+        std::vector<Index> locality, rank;
+        if (local) locality = reverse_cuthill_mckee<d>(A);
+        order.back() = Renumbering::by_colours<d>(A, locality);
+        if (local) rank = stored_rank(locality, order.back());
         order.back().permute_matrix(A);
         if (!P.empty()) order.back().permute_rows(P.back());
         // each coarse level (not the coarsest: it is factorized) by the colours of its Galerkin pattern
         BlockMatrix<d> pattern;
         for (int l = (int)P.size() - 1; l >= 1; --l) {
           pattern = galerkin_pattern<d>(l + 1 == (int)P.size() ? A : pattern, P[l], TransposedPattern<d>(P[l]));
-          if (local) visit = induced_locality_order(P[l], rank);  // P[l]'s rows: stored, its columns: the user's
-          order[l] = Renumbering::by_colours<d>(pattern, visit);
-          if (local) rank = stored_rank(visit, order[l]);
+          if (local) locality = induced_locality_order(P[l], rank);  // P[l]'s rows: stored, its columns: the user's
+          order[l] = Renumbering::by_colours<d>(pattern, locality);
+          if (local) rank = stored_rank(locality, order[l]);
           order[l].permute_matrix(pattern);
           order[l].permute_columns(P[l]);
           order[l].permute_rows(P[l - 1]);
@@ -241,7 +241,7 @@ class ContactSolver {
     }
   };
 
-  // rank[k]: the position of stored row k in the locality order `visit` (the user's numbers)
+  // rank[k]: the position of stored row k in the locality order `visit` (of the user's numbers)
   static std::vector<Index> stored_rank(const std::vector<Index>& visit, const Renumbering& R) {
     const std::vector<Index> user = rank_of(visit);
     std::vector<Index> rank(user.size());
@@ -257,8 +257,7 @@ class ContactSolver {
         H_(transformed(std::move(S.P))),
         C_(H_),
         cyc_(cyc),
-        order_(std::move(S.order)),
-        local_(locality_order_enabled()) {
+        order_(std::move(S.order)) {
     // the lexicographic order of a renumbered level is the user's order (fine: made on first use)
     for (int l = 1; l + 1 < (int)order_.size(); ++l)
       if (!order_[l].identity()) C_.set_rows_to_smooth(l, SweepOrder(order_[l].new_of_old()));
@@ -288,20 +287,8 @@ class ContactSolver {
       if (!fine.identity() && lexicographic_.all()) lexicographic_ = SweepOrder(fine.new_of_old());
       return lexicographic_;
     }
-    if (!fine_coloured_.coloured()) {
-      // stored by colours: greedy in storage order gives every row its stored colour again; in the
-      // user's storage the colours of the locality order of every level, as a solver stored by
-      // colours has them (the same method in either storage)
-      if (!fine.identity() || !local_) fine_coloured_ = SweepOrder().coloured_by<d>(P_.matrix());
-      else {
-        std::vector<Index> visit = reverse_cuthill_mckee<d>(P_.matrix());
-        fine_coloured_ = SweepOrder(visit).coloured_by<d>(P_.matrix());
-        for (int l = H_.num_coarse_levels() - 1; l >= 1; --l) {
-          visit = induced_locality_order(H_.prolongation(l), rank_of(visit));
-          C_.set_colouring_visit(l, SweepOrder(visit));
-        }
-      }
-    }
+    if (!fine_coloured_.coloured())
+      fine_coloured_ = (fine.identity() ? SweepOrder() : SweepOrder(fine.new_of_old())).coloured_by<d>(P_.matrix());
     return fine_coloured_;
   }
 
@@ -371,7 +358,6 @@ class ContactSolver {
   FineIterate<d> it_;
   Monitor mon_;
   std::vector<Renumbering> order_;  // storage order of each level (coarsest first, fine last)
-  bool local_;                      // coloured in the locality order (renumbering.hpp)
   SweepOrder lexicographic_, fine_coloured_;
   std::unique_ptr<TruncatedLinearCycle<d>> fine_cycle_;
   std::unique_ptr<TiedCorrection<d>> tied_;

@@ -1,9 +1,9 @@
 // The storage order of the nodes of one level: a permutation applied once at setup (matrix, vectors,
 // prolongations), undone on the way out, so that the user's numbering is all the caller sees.
 // By colours (issue 15): the rows of one colour of the greedy colouring (sweep_order.hpp) become
-// one contiguous range, ascending in the user's numbering within a colour (the locality the mesh
-// had), so a coloured sweep streams the matrix and the iterate like a lexicographic one instead of
-// gathering the rows of a colour from all over memory. The colouring of the renumbered level is
+// one contiguous range, in the level's locality order within a colour (below), so a coloured sweep
+// streams the matrix and the iterate like a lexicographic one instead of gathering the rows of a
+// colour from all over memory, and the neighbours it gathers are near in every colour's range. The colouring of the renumbered level is
 // the colouring of the original one (greedy in colour-major order gives every row its colour
 // again), so the method is unchanged; only round-off differs (sums run in another column order).
 #pragma once
@@ -12,7 +12,7 @@
 
 namespace cmg {
 
-// Tests and benchmarks: when false, a level is coloured and stored in the user's numbering (main
+// Tests and benchmarks: when false, the rows of a colour are stored in the user's numbering (main
 // before the locality order); read when a solver is built, so two solvers of one process compare.
 inline bool& locality_order_enabled() {
   static bool on = true;
@@ -23,8 +23,8 @@ inline bool& locality_order_enabled() {
 // every refinement appends its new nodes, so a row's neighbours lay all over the vector (19 MB at
 // level 9 in 2D against 2 MB of L2) and every gather of a sweep, product or transfer missed the
 // cache. Reverse Cuthill-McKee is a wavefront through the mesh: a row's neighbours lie within about
-// one wavefront (~sqrt(n) nodes) of it, and within each colour of a greedy colouring in that order
-// too. It needs only the block graph (the core has no coordinates). Each component starts at a
+// one wavefront (~sqrt(n) nodes) of it, and so, within each colour's range sorted in that order, at
+// about the same relative position as the row in its own range. It needs only the block graph (the core has no coordinates). Each component starts at a
 // pseudo-peripheral node (George-Liu), so two bodies get a wavefront each.
 template <int d>
 std::vector<Index> reverse_cuthill_mckee(const BlockMatrix<d>& A) {
@@ -114,15 +114,22 @@ class Renumbering {
   Renumbering() = default;  // the identity
   // old_of_new[k]: the user's number of stored node k. Only this direction is kept (4 bytes a node).
   explicit Renumbering(const std::vector<Index>& old_of_new) : old_of_new_(old_of_new.begin(), old_of_new.end()) {}
-  // The colour-major order of the greedy colouring of A's block graph visiting the rows in `visit`
-  // (a locality order; the user's order when empty), each colour's rows in that order.
+  // The colour-major order of the greedy colouring of A's block graph (visiting the rows in the
+  // user's order: the colouring, and so the method, is the one it always was), each colour's rows
+  // in the locality order `local` (a permutation; the user's order when empty).
   template <int d>
-  static Renumbering by_colours(const BlockMatrix<d>& A, std::vector<Index> visit = {}) {
-    if (visit.empty()) {
-      visit.resize(A.rows);
-      for (Index i = 0; i < A.rows; ++i) visit[i] = i;
+  static Renumbering by_colours(const BlockMatrix<d>& A, const std::vector<Index>& local = {}) {
+    std::vector<Index> rows(A.rows);
+    for (Index i = 0; i < A.rows; ++i) rows[i] = i;
+    const SweepOrder S = SweepOrder(rows).coloured_by<d>(A);
+    if (!S.contiguous()) rows = S.rows();  // else the colour-major order is the identity
+    if (!local.empty()) {
+      const std::vector<Index> rank = rank_of(local);
+      const std::vector<Index>& ptr = S.colour_ptr();
+      for (std::size_t c = 0; c + 1 < ptr.size(); ++c)
+        std::sort(rows.begin() + ptr[c], rows.begin() + ptr[c + 1], [&](Index a, Index b) { return rank[a] < rank[b]; });
     }
-    return Renumbering(SweepOrder(std::move(visit)).coloured_by<d>(A, true).rows());
+    return Renumbering(rows);
   }
   // The user's number of every stored node (the identity: empty)
   const std::vector<ColIndex>& old_of_new() const { return old_of_new_; }

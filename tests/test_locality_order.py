@@ -1,4 +1,4 @@
-"""Issue 15: every level coloured and stored by colours in its locality order (renumbering.hpp), and
+"""Issue 15: every colour of a level stored by colours in the level's locality order (renumbering.hpp), and
 the coarse sweeps' range kernel (mg/level_smoothers.hpp). What goes in and out stays in the user's
 numbering, the result does not depend on the thread count, the kernel gives the per-row path's bits,
 and the coloured method stays as fast to converge as before."""
@@ -83,9 +83,9 @@ def test_locality_order_keeps_the_users_numbering():
         assert np.array_equal(Mo.indptr, Mn.indptr) and np.array_equal(Mo.indices, Mn.indices)
         assert np.abs(Mo.data - Mn.data).max() <= 1e-13 * np.abs(Mo.data).max()
     a, b = old.solve("nmg", ordering="coloured"), new.solve("nmg", ordering="coloured")
-    assert a.converged and b.converged and abs(a.cycles - b.cycles) <= 1
+    assert a.converged and b.converged and a.cycles == b.cycles
     scale = np.abs(a.displacement).max()
-    assert np.abs(a.displacement - b.displacement).max() <= 1e-8 * scale
+    assert np.abs(a.displacement - b.displacement).max() <= 1e-10 * scale
     assert np.array_equal(a.node_state, b.node_state)
     # u0 in the user's numbering: the solution itself is a fixed point of the locality-ordered cycle
     c = new.solve("nmg", ordering="coloured", u0=b.displacement)
@@ -93,13 +93,16 @@ def test_locality_order_keeps_the_users_numbering():
 
 
 @pytest.mark.parametrize("level, F", [(4, 0.4), (6, 0.4), (6, 5.0), (7, 8.0)])
-def test_locality_order_converges_as_fast_as_the_users_order(level, F):
+def test_locality_order_keeps_the_colouring(level, F):
+    # only the order within a colour changes: the same method, the same cycles, round-off apart
     make = lambda: hertz_problem("triangle", level, F)
-    lex = _built(make, True, "lexicographic").solve("nmg", ordering="lexicographic")
     old = _built(make, False).solve("nmg", ordering="coloured")
     new = _built(make, True).solve("nmg", ordering="coloured")
-    assert lex.converged and old.converged and new.converged
-    assert new.cycles <= min(lex.cycles, old.cycles) + 2
+    user = _built(make, True, "lexicographic").solve("nmg", ordering="coloured")  # coloured in the user's storage
+    assert old.converged and new.converged and old.cycles == new.cycles == user.cycles
+    scale = np.abs(old.displacement).max()
+    assert np.abs(new.displacement - old.displacement).max() <= 1e-10 * scale
+    assert np.abs(new.displacement - user.displacement).max() <= 1e-10 * scale
 
 
 def test_the_switches_are_restored():

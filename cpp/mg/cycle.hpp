@@ -75,8 +75,7 @@ inline void check_smoothing_steps(int nu1, int nu2) {
 template <int d>
 class CoarseCycle {
  public:
-  explicit CoarseCycle(const GalerkinHierarchy<d>& H)
-      : H_(H), order_(H.num_coarse_levels()), colour_visit_(H.num_coarse_levels()), every_row_(H.num_coarse_levels(), 1) {
+  explicit CoarseCycle(const GalerkinHierarchy<d>& H) : H_(H), order_(H.num_coarse_levels()) {
     const int nc = H.num_coarse_levels();
     lv_.resize(nc);
     for (int l = 0; l < nc; ++l) {
@@ -90,18 +89,8 @@ class CoarseCycle {
   // The rows smoothed on coarse level l (all by default; the changed region of an adaptive
   // hierarchy). The coarsest level is solved, not smoothed, on all its rows.
   void set_rows_to_smooth(int l, SweepOrder order) {
-    const Index n = H_.prolongation(l).cols;
-    order.check(n);
-    every_row_.at(l) = order.all() || covers_every_row(order.rows(), n);
+    order.check(H_.prolongation(l).cols);
     order_.at(l) = std::move(order);
-    coloured_.clear();
-  }
-  // The order in which the greedy colouring of level l visits its rows when every row is smoothed
-  // (the level's locality order; storage order by default, which on a level stored by colours
-  // gives every row its stored colour again). A list of every row is the default, so it is coloured
-  // the same way.
-  void set_colouring_visit(int l, SweepOrder visit) {
-    colour_visit_.at(l) = std::move(visit);
     coloured_.clear();
   }
   // The orders of the coarse levels' sweeps for `o` (the coloured ones built on first use: the
@@ -109,8 +98,7 @@ class CoarseCycle {
   const std::vector<SweepOrder>& orders(Ordering o) {
     if (o == Ordering::Lexicographic) return order_;
     if (coloured_.empty()) {
-      for (int l = 0; l < (int)order_.size(); ++l)
-        coloured_.push_back((every_row_[l] ? colour_visit_[l] : order_[l]).coloured_by<d>(H_.matrix(l)));
+      for (int l = 0; l < (int)order_.size(); ++l) coloured_.push_back(order_[l].coloured_by<d>(H_.matrix(l)));
       coarsest_all_ = SweepOrder().coloured_by<d>(H_.matrix(0));
     }
     return coloured_;
@@ -261,18 +249,7 @@ class CoarseCycle {
   Index serial_rows_ = 0;  // parallel_grains().level_rows of this correction (see cycle())
   bool serial_ = false;
   const GalerkinHierarchy<d>& H_;
-  static bool covers_every_row(const std::vector<Index>& rows, Index n) {
-    if ((Index)rows.size() != n) return false;
-    std::vector<std::uint8_t> seen(n, 0);
-    for (Index i : rows) {
-      if (seen[i]) return false;
-      seen[i] = 1;
-    }
-    return true;
-  }
-
-  std::vector<SweepOrder> order_, colour_visit_, coloured_;
-  std::vector<std::uint8_t> every_row_;  // order_[l] lists every row of level l
+  std::vector<SweepOrder> order_, coloured_;
   SweepOrder coarsest_all_;                      // every row of the coarsest level, coloured
   const std::vector<SweepOrder>* cur_ = nullptr;  // the orders of the cycle under way
   bool lines_ = false;                            // line sweeps in the cycle under way

@@ -30,12 +30,13 @@ class SweepOrder {
   bool contiguous() const { return contiguous_; }
   std::size_t memory_bytes() const { return sizeof(Index) * (rows_.size() + colour_ptr_.size()); }
   Index num_colours() const { return coloured() ? (Index)colour_ptr_.size() - 1 : 0; }
+  // coloured: the rows of colour c are rows()[colour_ptr()[c] .. colour_ptr()[c + 1])
+  const std::vector<Index>& colour_ptr() const { return colour_ptr_; }
 
   // The same rows by colours of the block graph of A: greedy, visiting the rows in their order
-  // and giving each the smallest colour none of its coupled rows has; rows ascending per colour
-  // (in_visit_order: in the order visited, which is how a renumbering by colours stores them).
+  // and giving each the smallest colour none of its coupled rows has; rows ascending per colour.
   template <int d>
-  SweepOrder coloured_by(const BlockMatrix<d>& A, bool in_visit_order = false) const {
+  SweepOrder coloured_by(const BlockMatrix<d>& A) const {
     std::vector<Index> rows = rows_;
     if (all_) {
       rows.resize(A.rows);
@@ -62,7 +63,7 @@ class SweepOrder {
     std::vector<Index> fill(S.colour_ptr_.begin(), S.colour_ptr_.end() - 1);
     S.rows_.resize(rows.size());
     std::vector<Index> sorted = rows;
-    if (!in_visit_order) std::sort(sorted.begin(), sorted.end());
+    std::sort(sorted.begin(), sorted.end());
     for (Index i : sorted) S.rows_[fill[colour[i]]++] = i;
     // Stored by colours (renumbering.hpp), every colour is the range colour_ptr_[c] .. [c + 1):
     // the list of rows is then the identity and is dropped.
