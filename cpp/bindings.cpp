@@ -564,6 +564,13 @@ PYBIND11_MODULE(_core, m) {
   }, py::arg("on") = py::none(),
   "tests: every coarse (projected or block) sweep through the per-row path (True) or the range kernel where the level "
   "is stored by colours (False, the default); returns the previous setting (None: only returns it)");
+  m.def("_prefetch_value_rows", [](py::object rows) {
+    const Index old = prefetch_value_rows();
+    if (!rows.is_none()) prefetch_value_rows() = rows.cast<Index>();
+    return old;
+  }, py::arg("rows") = py::none(),
+  "benchmarks: the fine and coarse sweeps, the products, the residual and the norm passes prefetch the matrix values of the row this many rows ahead "
+  "(0: off; 16 by default); returns the previous setting (None: only returns it)");
   m.def("_locality_order", [](py::object on) {
     const bool old = locality_order_enabled();
     if (!on.is_none()) locality_order_enabled() = on.cast<bool>();

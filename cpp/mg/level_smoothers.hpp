@@ -143,8 +143,10 @@ void gs_range(const BlockMatrix<d>& A, const double* Dinv, const std::uint8_t* b
   const Index* ptr = A.indptr.data();
   const Index* diag = A.diag.data();
   const Index n = A.rows;
+  const Index ahead = prefetch_value_rows();
   for (Index i = r0; i < r1; ++i) {
     if (i + kPrefetchRows < n) prefetch_block_columns<d>(cols, ptr[i + kPrefetchRows], ptr[i + kPrefetchRows + 1], x);
+    prefetch_row_values<d>(values, ptr, i, ahead, n);
     if (bounded && bounded[i]) {
       projected_row_out_of_line<d>(A, inert, lo, hi, b, x, i);
       continue;

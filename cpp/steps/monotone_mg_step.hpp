@@ -111,8 +111,10 @@ class MonotoneMultigridStep {
     }
     // Au += A (u - u_old) and e = |u - u_old|_A^2 in one pass (were four: difference, product,
     // update, dot); sums over fixed chunks of rows, so the same on any thread count
+    const Index ahead = prefetch_value_rows();
     const double e = parallel_sum(A.rows, [&](Index i) {
       A.prefetch_ahead(i, u.data(), old_.data());  // two gathers a block (block_matrix.hpp says why)
+      prefetch_row_values<d>(A.values.data(), A.indptr.data(), i, ahead, A.rows);
       Vec<d> y = Vec<d>::Zero();
       accumulate_block_differences<d>(A.values.data(), A.indices.data(), A.indptr[i], A.indptr[i + 1], u.data(), old_.data(), y.data());
       VecMap<d>(it_.Au.data() + d * i) += y;
@@ -189,8 +191,10 @@ class MonotoneMultigridStep {
   // changed). The same sums over the same chunks as the norm pass of iterate().
   double change_norm_squared(const std::vector<double>& x, const std::vector<double>& y, double* z) const {
     const BlockMatrix<d>& A = P_.matrix();
+    const Index ahead = prefetch_value_rows();
     return parallel_sum(A.rows, [&](Index i) {
       A.prefetch_ahead(i, y.data(), x.data());
+      prefetch_row_values<d>(A.values.data(), A.indptr.data(), i, ahead, A.rows);
       Vec<d> w = Vec<d>::Zero();
       accumulate_block_differences<d>(A.values.data(), A.indices.data(), A.indptr[i], A.indptr[i + 1], y.data(), x.data(), w.data());
       VecMap<d>(z + d * i) = w;

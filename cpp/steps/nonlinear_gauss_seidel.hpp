@@ -59,8 +59,10 @@ struct NonlinearGaussSeidel {
     const std::uint8_t other = L::has_contact ? (CP::kSpecialInverse | CP::kContactRow) : CP::kSpecialInverse;
     const double omega = P.smoothing_omega();
     const Index n = A.rows;
+    const Index ahead = prefetch_value_rows();
     for (Index i = b; i < e; ++i) {
       if (i + kPrefetchRows < n) prefetch_block_columns<d>(cols, ptr[i + kPrefetchRows], ptr[i + kPrefetchRows + 1], u);
+      prefetch_row_values<d>(values, ptr, i, ahead, n);
       if (flags[i] & other) {
         other_row(P, u, i);
         continue;
