@@ -1,7 +1,8 @@
-"""Issue 15: every level coloured and stored by colours in its locality order (reverse Cuthill-McKee
-of the fine level, the coarse levels in the order of their nodes' heaviest children, renumbering.hpp)
-against the same storage in the user's numbering (main before it), in one process, interleaved (the
-machine may be shared: the load average is printed with every row; medians over --repeats).
+"""Issue 15: each colour of a level stored by colours in the level's locality order (reverse
+Cuthill-McKee of the fine level, the coarse levels in the order of their nodes' heaviest children,
+renumbering.hpp; the colouring itself unchanged) against the same storage in the user's numbering
+within a colour (main before it), in one process, interleaved (the machine may be shared: the load
+average is printed with every row; medians over --repeats).
 
     python benchmarks/locality_order.py [--levels 8 9] [--levels3d] [--repeats 3] [--threads 1 2] [--json out.json]
 

@@ -3,9 +3,10 @@
 // By colours (issue 15): the rows of one colour of the greedy colouring (sweep_order.hpp) become
 // one contiguous range, in the level's locality order within a colour (below), so a coloured sweep
 // streams the matrix and the iterate like a lexicographic one instead of gathering the rows of a
-// colour from all over memory, and the neighbours it gathers are near in every colour's range. The colouring of the renumbered level is
-// the colouring of the original one (greedy in colour-major order gives every row its colour
-// again), so the method is unchanged; only round-off differs (sums run in another column order).
+// colour from all over memory, and the neighbours it gathers are near in every colour's range.
+// The colouring of the renumbered level is the colouring of the original one (greedy in
+// colour-major order gives every row its colour again), so the method is unchanged; only round-off
+// differs (sums run in another column order).
 #pragma once
 #include "block_matrix.hpp"
 #include "mg/sweep_order.hpp"
