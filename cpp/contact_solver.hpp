@@ -205,14 +205,22 @@ class ContactSolver {
       }
       order.resize(P.size() + 1);
       if (renumber) {
-        order.back() = Renumbering::by_colours<d>(A);
+        // each colour stored in the level's locality order (renumbering.hpp); rank: the locality
+        // position of each stored row of the level just renumbered
+        const bool local = locality_order_enabled();
+        std::vector<Index> locality, rank;
+        if (local) locality = reverse_cuthill_mckee<d>(A);
+        order.back() = Renumbering::by_colours<d>(A, locality);
+        if (local) rank = stored_rank(locality, order.back());
         order.back().permute_matrix(A);
         if (!P.empty()) order.back().permute_rows(P.back());
         // each coarse level (not the coarsest: it is factorized) by the colours of its Galerkin pattern
         BlockMatrix<d> pattern;
         for (int l = (int)P.size() - 1; l >= 1; --l) {
           pattern = galerkin_pattern<d>(l + 1 == (int)P.size() ? A : pattern, P[l], TransposedPattern<d>(P[l]));
-          order[l] = Renumbering::by_colours<d>(pattern);
+          if (local) locality = induced_locality_order(P[l], rank);  // P[l]'s rows: stored, its columns: the user's
+          order[l] = Renumbering::by_colours<d>(pattern, locality);
+          if (local) rank = stored_rank(locality, order[l]);
           order[l].permute_matrix(pattern);
           order[l].permute_columns(P[l]);
           order[l].permute_rows(P[l - 1]);
@@ -232,6 +240,14 @@ class ContactSolver {
       }
     }
   };
+
+  // rank[k]: the position of stored row k in the locality order `visit` (of the user's numbers)
+  static std::vector<Index> stored_rank(const std::vector<Index>& visit, const Renumbering& R) {
+    const std::vector<Index> user = rank_of(visit);
+    std::vector<Index> rank(user.size());
+    for (std::size_t k = 0; k < rank.size(); ++k) rank[k] = user[R.to_user((Index)k)];
+    return rank;
+  }
 
   ContactSolver(Stored S, const double* normals, const double* gaps, const double* coefficients, Law law, CycleOptions cyc,
                 const std::uint8_t* frame_fixed, const double* frame_values)

@@ -83,9 +83,95 @@ inline void relaxed_assign(VecMap<d>& xi, const Vec<d>& y, double omega) {
   else xi += omega * (y - Vec<d>(xi));
 }
 
+// Tests and benchmarks: when set, the coarse sweeps take the per-row path on every level instead of
+// the range kernel of a level stored by colours; the two give the same bits (tests/test_locality_order.py).
+inline bool& level_sweep_generic() {
+  static bool generic = false;
+  return generic;
+}
+
+// x <- x + omega (inv s - x) (relaxed_assign of inv * s) on scalars: Eigen's product summed each
+// row into a stack slot and read the two back as one 16-byte load -- a store-forwarding stall a
+// row, the hottest instruction of the fine sweep's kernel in perf annotate. The same products and
+// sums in the same order: the same bits.
+template <int d, class M>
+inline void relaxed_block_solve(const M& inv, const double* s, double* x, double omega) {
+  double y[d];
+  for (int a = 0; a < d; ++a) {
+    double t = inv(a, 0) * s[0];
+    for (int c = 1; c < d; ++c) t += inv(a, c) * s[c];
+    y[a] = t;
+  }
+  if (omega == 1.0)
+    for (int a = 0; a < d; ++a) x[a] = y[a];
+  else
+    for (int a = 0; a < d; ++a) x[a] += omega * (y[a] - x[a]);
+}
+
+// A bounded row of the projected sweep: component-wise exact minimization with clamping.
+template <int d>
+inline void projected_row(const BlockMatrix<d>& A, const std::uint8_t* inert, const double* lo, const double* hi, const Vec<d>& s,
+                          double* x, Index i) {
+  VecMap<d> xi(x + d * i);
+  const auto D = A.block(A.diag[i]);
+  for (int c = 0; c < d; ++c) {
+    if (inert[d * i + c]) continue;
+    double v = s[c];
+    for (int a = 0; a < d; ++a)
+      if (a != c) v -= D(c, a) * xi[a];
+    // max/min rather than std::clamp: rounding may leave lo a hair above hi
+    xi[c] = std::max(lo[d * i + c], std::min(v / D(c, c), hi[d * i + c]));
+  }
+}
+
+template <int d>
+__attribute__((noinline)) void projected_row_out_of_line(const BlockMatrix<d>& A, const std::uint8_t* inert, const double* lo,
+                                                         const double* hi, const double* b, double* x, Index i) {
+  projected_row<d>(A, inert, lo, hi, local_rhs<d>(A, x, b, i), x, i);
+}
+
+// The rows [r0, r1) of one colour of a level stored by colours (the coarse sweeps' kernel, as the
+// fine sweep's sweep_range): the matrix arrays in registers, x prefetched at the columns of the row
+// kPrefetchRows ahead (other colours' ranges), the stored inverse applied on scalars; bounded rows
+// (bounded != nullptr: a projected sweep; only near the contact zone) go out of line. The same
+// sums and products in the same order as the per-row path: the same bits.
+template <int d>
+void gs_range(const BlockMatrix<d>& A, const double* Dinv, const std::uint8_t* bounded, const std::uint8_t* inert, const double* lo,
+              const double* hi, const double* b, double* x, double omega, Index r0, Index r1) {
+  const double* values = A.values.data();
+  const ColIndex* cols = A.indices.data();
+  const Index* ptr = A.indptr.data();
+  const Index* diag = A.diag.data();
+  const Index n = A.rows;
+  const Index ahead = prefetch_value_rows();
+  for (Index i = r0; i < r1; ++i) {
+    if (i + kPrefetchRows < n) prefetch_block_columns<d>(cols, ptr[i + kPrefetchRows], ptr[i + kPrefetchRows + 1], x);
+    prefetch_row_values<d>(values, ptr, i, ahead, n);
+    if (bounded && bounded[i]) {
+      projected_row_out_of_line<d>(A, inert, lo, hi, b, x, i);
+      continue;
+    }
+    double s[d];
+    for (int a = 0; a < d; ++a) s[a] = b[d * i + a];
+    const Index kd = diag[i];
+    if (kd < 0) accumulate_blocks<d, true>(values, cols, ptr[i], ptr[i + 1], x, s);
+    else {
+      accumulate_blocks<d, true>(values, cols, ptr[i], kd, x, s);
+      accumulate_blocks<d, true>(values, cols, kd + 1, ptr[i + 1], x, s);
+    }
+    relaxed_block_solve<d>(CMatMap<d>(Dinv + i * d * d), s, x + d * i, omega);
+  }
+}
+
 template <int d>
 void block_gs_sweep(const BlockMatrix<d>& A, const std::vector<double>& Dinv, const double* b, double* x, bool forward,
                     const SweepOrder& order = SweepOrder(), double omega = 1.0) {
+  if (order.contiguous() && !level_sweep_generic()) {
+    order.visit_ranges(forward, [&](Index r0, Index r1) {
+      gs_range<d>(A, Dinv.data(), nullptr, nullptr, nullptr, nullptr, b, x, omega, r0, r1);
+    });
+    return;
+  }
   order.visit(A.rows, forward, [&](Index i) {
     VecMap<d> xi(x + d * i);
     relaxed_assign<d>(xi, CMatMap<d>(Dinv.data() + i * d * d) * local_rhs<d>(A, x, b, i), omega);
@@ -98,22 +184,20 @@ template <int d>
 void projected_gs_sweep(const BlockMatrix<d>& A, const std::vector<double>& Dinv, const std::vector<std::uint8_t>& bounded,
                         const std::vector<std::uint8_t>& inert, const double* lo, const double* hi, const double* b, double* x, bool forward,
                         const SweepOrder& order = SweepOrder(), double omega = 1.0) {
+  if (order.contiguous() && !level_sweep_generic()) {
+    order.visit_ranges(forward, [&](Index r0, Index r1) {
+      gs_range<d>(A, Dinv.data(), bounded.data(), inert.data(), lo, hi, b, x, omega, r0, r1);
+    });
+    return;
+  }
   order.visit(A.rows, forward, [&](Index i) {
     const Vec<d> s = local_rhs<d>(A, x, b, i);
-    VecMap<d> xi(x + d * i);
     if (!bounded[i]) {
+      VecMap<d> xi(x + d * i);
       relaxed_assign<d>(xi, CMatMap<d>(Dinv.data() + i * d * d) * s, omega);
       return;
     }
-    const auto D = A.block(A.diag[i]);
-    for (int c = 0; c < d; ++c) {
-      if (inert[d * i + c]) continue;
-      double v = s[c];
-      for (int a = 0; a < d; ++a)
-        if (a != c) v -= D(c, a) * xi[a];
-      // max/min rather than std::clamp: rounding may leave lo a hair above hi
-      xi[c] = std::max(lo[d * i + c], std::min(v / D(c, c), hi[d * i + c]));
-    }
+    projected_row<d>(A, inert.data(), lo, hi, s, x, i);
   });
 }
 

@@ -30,6 +30,8 @@ class SweepOrder {
   bool contiguous() const { return contiguous_; }
   std::size_t memory_bytes() const { return sizeof(Index) * (rows_.size() + colour_ptr_.size()); }
   Index num_colours() const { return coloured() ? (Index)colour_ptr_.size() - 1 : 0; }
+  // coloured: the rows of colour c are rows()[colour_ptr()[c] .. colour_ptr()[c + 1])
+  const std::vector<Index>& colour_ptr() const { return colour_ptr_; }
 
   // The same rows by colours of the block graph of A: greedy, visiting the rows in their order
   // and giving each the smallest colour none of its coupled rows has; rows ascending per colour.

@@ -92,14 +92,29 @@ class MonotoneMultigridStep {
       // plain result's exact state (admit_mixed), and a mixed step that does not help restarts.
       if (!any_sliding()) anderson_.reset();
       else {
-        const bool restart = state_changed && change_norm(old_, u) < best_step_;
-        anderson_.step(old_, u, [&](std::vector<double>& y, const std::vector<double>& plain) { return admit_mixed(y, plain); }, restart);
+        // The restart test's A (G(x) - x) goes into r_ (free after the coarse correction): where the
+        // mixed iterate is refused, u is G(x) bit for bit, and the update of A u below adds r_ and
+        // takes the test's |u - u_old|_A^2 (the same sums over the same chunks) instead of a
+        // second pass over the matrix.
+        double e_change = 0;
+        if (state_changed) e_change = change_norm_squared(old_, u, r_.data());
+        const bool restart = state_changed && std::sqrt(std::max(e_change, 0.0)) < best_step_;
+        const bool mixed =
+            anderson_.step(old_, u, [&](std::vector<double>& y, const std::vector<double>& plain) { return admit_mixed(y, plain); }, restart);
+        if (state_changed && !mixed) {
+          parallel_for((Index)u.size(), [&](Index k) { it_.Au[k] += r_[k]; });
+          pc.lap(Phase::Norm);
+          best_step_ = std::min(best_step_, std::sqrt(std::max(e_change, 0.0)));
+          return std::sqrt(std::max(e_change, 0.0));
+        }
       }
     }
     // Au += A (u - u_old) and e = |u - u_old|_A^2 in one pass (were four: difference, product,
     // update, dot); sums over fixed chunks of rows, so the same on any thread count
+    const Index ahead = prefetch_value_rows();
     const double e = parallel_sum(A.rows, [&](Index i) {
       A.prefetch_ahead(i, u.data(), old_.data());  // two gathers a block (block_matrix.hpp says why)
+      prefetch_row_values<d>(A.values.data(), A.indptr.data(), i, ahead, A.rows);
       Vec<d> y = Vec<d>::Zero();
       accumulate_block_differences<d>(A.values.data(), A.indices.data(), A.indptr[i], A.indptr[i + 1], u.data(), old_.data(), y.data());
       VecMap<d>(it_.Au.data() + d * i) += y;
@@ -172,16 +187,19 @@ class MonotoneMultigridStep {
     return bounded;
   }
 
-  // |y - x|_A (one product with A; taken only where the truncation changed)
-  double change_norm(const std::vector<double>& x, const std::vector<double>& y) const {
+  // |y - x|_A^2 with A (y - x) into z (one product with A; taken only where the truncation
+  // changed). The same sums over the same chunks as the norm pass of iterate().
+  double change_norm_squared(const std::vector<double>& x, const std::vector<double>& y, double* z) const {
     const BlockMatrix<d>& A = P_.matrix();
-    const double e = parallel_sum(A.rows, [&](Index i) {
+    const Index ahead = prefetch_value_rows();
+    return parallel_sum(A.rows, [&](Index i) {
       A.prefetch_ahead(i, y.data(), x.data());
-      Vec<d> z = Vec<d>::Zero();
-      accumulate_block_differences<d>(A.values.data(), A.indices.data(), A.indptr[i], A.indptr[i + 1], y.data(), x.data(), z.data());
-      return (CVecMap<d>(y.data() + d * i) - CVecMap<d>(x.data() + d * i)).dot(z);
+      prefetch_row_values<d>(A.values.data(), A.indptr.data(), i, ahead, A.rows);
+      Vec<d> w = Vec<d>::Zero();
+      accumulate_block_differences<d>(A.values.data(), A.indices.data(), A.indptr[i], A.indptr[i + 1], y.data(), x.data(), w.data());
+      VecMap<d>(z + d * i) = w;
+      return (CVecMap<d>(y.data() + d * i) - CVecMap<d>(x.data() + d * i)).dot(w);
     });
-    return std::sqrt(std::max(e, 0.0));
   }
 
   bool any_sliding() const {

@@ -59,8 +59,10 @@ struct NonlinearGaussSeidel {
     const std::uint8_t other = L::has_contact ? (CP::kSpecialInverse | CP::kContactRow) : CP::kSpecialInverse;
     const double omega = P.smoothing_omega();
     const Index n = A.rows;
+    const Index ahead = prefetch_value_rows();
     for (Index i = b; i < e; ++i) {
       if (i + kPrefetchRows < n) prefetch_block_columns<d>(cols, ptr[i + kPrefetchRows], ptr[i + kPrefetchRows + 1], u);
+      prefetch_row_values<d>(values, ptr, i, ahead, n);
       if (flags[i] & other) {
         other_row(P, u, i);
         continue;
@@ -70,28 +72,11 @@ struct NonlinearGaussSeidel {
       accumulate_blocks<d, true>(values, cols, ptr[i], kd, u, s.data());
       accumulate_blocks<d, true>(values, cols, kd + 1, ptr[i + 1], u, s.data());
       const Mat<d> inv = Mat<d>(CMatMap<d>(values + kd * d * d)).inverse();  // ContactProblem::diagonal_inverse's
-      relaxed_block_solve(inv, s.data(), u + d * i, omega);
+      relaxed_block_solve<d>(inv, s.data(), u + d * i, omega);
     }
   }
 
  private:
-  // x <- x + omega (inv s - x) (relaxed_assign of inv * s) on scalars: Eigen's product summed each
-  // row into a stack slot and read the two back as one 16-byte load -- a store-forwarding stall a
-  // row, the hottest instruction of the kernel in perf annotate. The same products and sums in the
-  // same order: the same bits.
-  static void relaxed_block_solve(const Mat<d>& inv, const double* s, double* x, double omega) {
-    double y[d];
-    for (int a = 0; a < d; ++a) {
-      double t = inv(a, 0) * s[0];
-      for (int c = 1; c < d; ++c) t += inv(a, c) * s[c];
-      y[a] = t;
-    }
-    if (omega == 1.0)
-      for (int a = 0; a < d; ++a) x[a] = y[a];
-    else
-      for (int a = 0; a < d; ++a) x[a] += omega * (y[a] - x[a]);
-  }
-
   __attribute__((noinline)) static void other_row(const ContactProblem<d>& P, double* u, Index i) { row_update(P, u, i); }
 };
 
