@@ -94,6 +94,7 @@ def test_ctrl_c_stops_a_long_solve_cleanly():
     """The CLI interrupted inside the solve (the child announces on stderr when the C++ solve is
     entered, so the signal does not land in the setup): exit 130, one line, no traceback."""
     code = ("import sys\n"
+            "import signal; signal.signal(signal.SIGINT, signal.default_int_handler)\n"  # a suite started in the background inherits SIGINT ignored
             "from contactmg import _core, cli\n"
             "orig = _core.ContactSolver2D.solve\n"
             "def solve(self, *a, **k):\n"
@@ -148,6 +149,7 @@ def test_ctrl_c_inside_the_cycles_stops_the_solve():
     callback and says READY after the first one, so the signal reaches the cycles, not the setup;
     the solver is usable afterwards."""
     code = ("import sys, time\n"
+            "import signal; signal.signal(signal.SIGINT, signal.default_int_handler)\n"  # a suite started in the background inherits SIGINT ignored
             "from contactmg import hertz\n"
             "p = hertz.hertz_problem('triangle', 7, 0.4); s = p.solver\n"
             "seen = []\n"
