@@ -158,6 +158,17 @@ py::dict result_to_dict(SolveResult& R, const ContactSolver<d>& S) {
 
 const char* cycle_name(CycleType t) { return t == CycleType::V ? "V" : t == CycleType::W ? "W" : "F"; }
 
+// A process-wide switch of the core (tests and benchmarks compare two paths in one process): sets it
+// unless given None, and returns the previous value.
+template <class T>
+void def_switch(py::module_& m, const char* name, T& (*setting)(), const char* arg, const char* doc) {
+  m.def(name, [setting](py::object v) {
+    const T old = setting();
+    if (!v.is_none()) setting() = v.cast<T>();
+    return old;
+  }, py::arg(arg) = py::none(), doc);
+}
+
 template <int d>
 void bind_dim(py::module_& m) {
   const std::string sfx = std::to_string(d) + "D";
@@ -550,35 +561,19 @@ PYBIND11_MODULE(_core, m) {
     return triad_bytes_per_second(n, repeats) / 1e9;
   }, py::arg("n") = 40000000, py::arg("repeats") = 5, py::arg("threads") = 1,
   "GB/s of the triad a = b + 1.5 c over n doubles on `threads` threads (best of `repeats`; 24 bytes an entry)");
-  m.def("_fine_sweep_generic", [](py::object on) {
-    const bool old = fine_sweep_generic();
-    if (!on.is_none()) fine_sweep_generic() = on.cast<bool>();
-    return old;
-  }, py::arg("on") = py::none(),
-  "tests: every fine nonlinear sweep through the per-row path (True) or the range kernel where the level is stored "
-  "by colours (False, the default); returns the previous setting (None: only returns it)");
-  m.def("_level_sweep_generic", [](py::object on) {
-    const bool old = level_sweep_generic();
-    if (!on.is_none()) level_sweep_generic() = on.cast<bool>();
-    return old;
-  }, py::arg("on") = py::none(),
-  "tests: every coarse (projected or block) sweep through the per-row path (True) or the range kernel where the level "
-  "is stored by colours (False, the default); returns the previous setting (None: only returns it)");
-  m.def("_prefetch_value_rows", [](py::object rows) {
-    const Index old = prefetch_value_rows();
-    if (!rows.is_none()) prefetch_value_rows() = rows.cast<Index>();
-    return old;
-  }, py::arg("rows") = py::none(),
-  "benchmarks: the fine and coarse sweeps, the products, the residual and the norm passes prefetch the matrix values of the row this many rows ahead "
-  "(0: off; 16 by default); returns the previous setting (None: only returns it)");
-  m.def("_locality_order", [](py::object on) {
-    const bool old = locality_order_enabled();
-    if (!on.is_none()) locality_order_enabled() = on.cast<bool>();
-    return old;
-  }, py::arg("on") = py::none(),
-  "tests and benchmarks: solvers built from now on colour (and store by colours) every level in its locality "
-  "order (True, the default) or in the user's numbering (False, as before issue 15's locality order); returns the "
-  "previous setting (None: only returns it)");
+  def_switch(m, "_fine_sweep_generic", &fine_sweep_generic, "on",
+             "tests: every fine nonlinear sweep through the per-row path (True) or the range kernel where the level is "
+             "stored by colours (False, the default); returns the previous setting (None: only returns it)");
+  def_switch(m, "_level_sweep_generic", &level_sweep_generic, "on",
+             "tests: every coarse (projected or block) sweep through the per-row path (True) or the range kernel where the "
+             "level is stored by colours (False, the default); returns the previous setting (None: only returns it)");
+  def_switch(m, "_prefetch_value_rows", &prefetch_value_rows, "rows",
+             "benchmarks: the fine and coarse sweeps, the products, the residual and the norm passes prefetch the matrix "
+             "values of the row this many rows ahead (0: off; 16 by default); returns the previous setting (None: only returns it)");
+  def_switch(m, "_locality_order", &locality_order_enabled, "on",
+             "tests and benchmarks: solvers built from now on colour (and store by colours) every level in its locality "
+             "order (True, the default) or in the user's numbering (False, as before issue 15's locality order); returns the "
+             "previous setting (None: only returns it)");
   m.def("anderson_iterates", [](DArr M, DArr c, DArr x0, int steps, int refuse_every, int threads) {
     const Index n = c.size(), m = M.ndim() == 2 ? M.shape(0) : 0;
     if (m < 1 || n % m != 0) throw InputError("M must be m x m with m dividing the length of c");
