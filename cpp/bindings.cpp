@@ -390,6 +390,10 @@ void bind_dim(py::module_& m) {
            "Load paths: the previous step's displacement (n, d), canonical; friction then acts on the slip "
            "increment u_T - u_prev_T and stick means no slip in this step. None: from the reference configuration")
       .def_property_readonly("has_slip_origin", &CS::has_slip_origin)
+      .def("_keep_cycle_workspace", &CS::keep_workspace, py::arg("on"),
+           "whether the fine vectors of the cycles (r, u_old, the Anderson history) stay from one solve to the next "
+           "(True, the default: a later solve touches no new pages) or go at the end of each (a solver made for one "
+           "solve: the lower peak); returns the previous setting")
       .def("fine_matrix", [](const CS& S) { return std::make_shared<BM>(S.fine_matrix_in_user_order()); })
       .def_property_readonly("renumbered", &CS::renumbered, "whether the levels are stored by colours")
       .def("memory_bytes", &CS::memory_bytes)
@@ -573,6 +577,10 @@ PYBIND11_MODULE(_core, m) {
   def_switch(m, "_locality_order", &locality_order_enabled, "on",
              "tests and benchmarks: solvers built from now on colour (and store by colours) every level in its locality "
              "order (True, the default) or in the user's numbering (False, as before issue 15's locality order); returns the "
+             "previous setting (None: only returns it)");
+  def_switch(m, "_keep_cycle_workspace", &keep_cycle_workspace, "on",
+             "tests and benchmarks: a solver keeps the fine vectors of its cycles (r, u_old, the Anderson history) from one "
+             "solve to the next (True, the default) or every solve allocates them again (False, as before); returns the "
              "previous setting (None: only returns it)");
   m.def("anderson_iterates", [](DArr M, DArr c, DArr x0, int steps, int refuse_every, int threads) {
     const Index n = c.size(), m = M.ndim() == 2 ? M.shape(0) : 0;

@@ -61,6 +61,7 @@ class ContactSolver {
     for (const Renumbering& R : order_) s += R.memory_bytes();
     if (fine_cycle_) s += fine_cycle_->memory_bytes();
     if (tied_) s += tied_->memory_bytes();
+    s += work_.anderson.memory_bytes();  // r, u_old counted above
     return s;
   }
   // Load paths: friction on the slip increment from the canonical displacement u_prev (nullptr: none).
@@ -69,6 +70,15 @@ class ContactSolver {
     P_.set_slip_origin(order_.back().to_storage(u_prev, num_nodes(), d).data());
   }
   bool has_slip_origin() const { return P_.has_slip_origin(); }
+  // Whether the cycles' workspace stays from one solve to the next (default). A solver made for one
+  // solve turns it off: kept, it is 8 fine vectors alive while the result is written (+8 B/dof on
+  // the peak of a level-9 solve in 2D) and 64 B/dof held after it.
+  bool keep_workspace(bool on) {
+    const bool old = keep_work_;
+    keep_work_ = on;
+    if (!on) work_ = CycleWorkspace();
+    return old;
+  }
   Index num_fine_colours() { return fine_order(Ordering::Coloured).num_colours(); }
   // A second, bounds-free coarse correction with every contact dof frozen after each coarse
   // correction of the nmg and fixed-point methods (steps/tied_correction.hpp; two bodies).
@@ -89,8 +99,8 @@ class ContactSolver {
       P_.set_bounds_to_coefficients();
       P_.set_smoothing_omega(cyc.omega);
       SolveResult R;
-      {  // the step's vectors are freed before the result is written (the peak of a solve)
-        MonotoneMultigridStep<d, Law> step(P_, H_, C_, built_, it_, cyc, fine_order(cyc.ordering), tied_.get());
+      {
+        MonotoneMultigridStep<d, Law> step(P_, H_, C_, built_, it_, cyc, fine_order(cyc.ordering), tied_.get(), workspace());
         run_loop(step, stored(opt), mon_, R, 0);
       }
       finish<Law>(R);
@@ -152,7 +162,7 @@ class ContactSolver {
     start(u0);
     P_.set_smoothing_omega(cyc.omega);
     SolveResult R;
-    MonotoneMultigridStep<d, law::Tresca> tresca(P_, H_, C_, built_, it_, cyc, fine_order(cyc.ordering), tied_.get());
+    MonotoneMultigridStep<d, law::Tresca> tresca(P_, H_, C_, built_, it_, cyc, fine_order(cyc.ordering), tied_.get(), workspace());
     FixedPointStep<d> step(P_, tresca, it_);
     run_fixed_point(step, stored(opt), mon_, R);
     finish<law::Coulomb>(R);
@@ -177,6 +187,11 @@ class ContactSolver {
   }
 
  private:
+  CycleWorkspace* workspace() {
+    if (cmg::keep_cycle_workspace() && keep_work_) return &work_;
+    work_ = CycleWorkspace();  // not kept: what an earlier solve kept goes, the step allocates its own
+    return nullptr;
+  }
   // The fine data and the prolongations in storage order (the renumbering of every level).
   struct Stored {
     BlockMatrix<d> A;
@@ -356,6 +371,8 @@ class ContactSolver {
   CycleOptions cyc_;
   BuiltLinearization<d> built_;
   FineIterate<d> it_;
+  CycleWorkspace work_;  // r, u_old, the Anderson slots: kept across solves (monotone_mg_step.hpp says why)
+  bool keep_work_ = true;  // off for a solver made for one solve: then the step's vectors go before the result is written
   Monitor mon_;
   std::vector<Renumbering> order_;  // storage order of each level (coarsest first, fine last)
   SweepOrder lexicographic_, fine_coloured_;

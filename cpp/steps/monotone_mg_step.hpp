@@ -40,6 +40,25 @@ struct BuiltLinearization {
   }
 };
 
+// The fine vectors of a cycle beyond the iterate's own: r, u_old and the Anderson history (six
+// more once a Coulomb solve slides). A solver keeps one across its solves (contact_solver.hpp):
+// a fresh step per solve allocated them again, 8 fine vectors of pages first touched inside the
+// solve (at level 9, 37,000 minor faults a solve, ~2,900 a cycle; the Anderson slots' in its
+// "norm" phase). On this project's VM a first touch of memory the guest had handed back costs up
+// to ~50 us a page (0.4-0.5 s of system time a cycle while the history filled): issue 15.
+// Tests and benchmarks: false gives every solve a fresh workspace again (as before), to compare the
+// two in one process.
+inline bool& keep_cycle_workspace() {
+  static bool keep = true;
+  return keep;
+}
+
+struct CycleWorkspace {
+  std::vector<double> r, old;
+  SettledAnderson anderson;
+  std::size_t memory_bytes() const { return sizeof(double) * (r.capacity() + old.capacity()) + anderson.memory_bytes(); }
+};
+
 template <int d, class L>
 class MonotoneMultigridStep {
   using Smoother = NonlinearGaussSeidel<d, L>;
@@ -47,11 +66,13 @@ class MonotoneMultigridStep {
  public:
   MonotoneMultigridStep(const ContactProblem<d>& P, GalerkinHierarchy<d>& H, CoarseCycle<d>& C, BuiltLinearization<d>& built,
                         FineIterate<d>& it, const CycleOptions& opt, const SweepOrder& fine_order = SweepOrder(),
-                        TiedCorrection<d>* tied = nullptr)
-      : P_(P), H_(H), C_(C), built_(built), it_(it), opt_(opt), order_(fine_order), tied_(tied) {
+                        TiedCorrection<d>* tied = nullptr, CycleWorkspace* work = nullptr)
+      : P_(P), H_(H), C_(C), built_(built), it_(it), opt_(opt), order_(fine_order), tied_(tied), ws_(work ? *work : own_),
+        r_(ws_.r), old_(ws_.old), anderson_(ws_.anderson) {
     const Index n = P.num_nodes() * d;
     mask_ = P.base_mask();
-    r_.assign(n, 0.0); old_.assign(n, 0.0);
+    r_.assign(n, 0.0); old_.assign(n, 0.0);  // of the same size: no new pages
+    anderson_.reset();  // a kept workspace: its slots stay, the history of the last solve goes
     lo_.assign(P.num_contact() * d, -kInf); hi_.assign(P.num_contact() * d, kInf);  // bounds live at contact nodes only
   }
 
@@ -241,11 +262,15 @@ class MonotoneMultigridStep {
   CycleOptions opt_;
   const SweepOrder& order_;  // of the fine nonlinear sweeps
   TiedCorrection<d>* tied_;   // or nullptr
+  CycleWorkspace own_;  // used when the caller keeps none (then freed with the step)
+  CycleWorkspace& ws_;
   std::vector<std::uint8_t> mask_;
-  // three fine vectors: the iterate's own (u, A u) aside, a cycle needs only r and u_old (issue 15)
-  std::vector<double> r_, old_, lo_, hi_;  // lo_, hi_: nc * d
+  // the iterate's own (u, A u) aside, a cycle needs only r and u_old (issue 15)
+  std::vector<double>& r_;
+  std::vector<double>& old_;
+  std::vector<double> lo_, hi_;  // nc * d
   std::vector<std::pair<Index, Mat<d>>> hessian_;
-  SettledAnderson anderson_;
+  SettledAnderson& anderson_;
   double best_step_ = kInf;  // the smallest |u^{k+1} - u^k|_A of this solve
 };
 
