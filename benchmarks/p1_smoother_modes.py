@@ -299,9 +299,9 @@ def work_nodal(A):
 
 
 def work_subspace(A, S):
-    """One subspace sweep as implemented by Gauss-Seidel on V^T A V: a residual (2 nnz(A)), V^T r
-    and V w (2 nnz(V) each), the triangular solve (2 nnz(G) / 2 + ...)."""
-    return 2 * A.nnz + 4 * S.nnzV + 2 * (S.nnzG + S.V.shape[1]) // 2 * 2 // 2 + S.V.shape[1]
+    """One subspace sweep done globally, as Gauss-Seidel on the stored G = V^T A V: a residual
+    (2 nnz(A)), V^T r and V w (2 nnz(V) each) and the triangular sweep over G (nnz(G) + n_V)."""
+    return 2 * A.nnz + 4 * S.nnzV + S.nnzG + S.V.shape[1]
 
 
 def work_subspace_local(A, V):
@@ -491,3 +491,130 @@ def rate_gen(lv, Ps, pre, post, cycles=16, seed=0):
         q.append(n)
         x /= n
     return float(np.exp(np.mean(np.log(q[-5:]))))
+
+
+# ---------------------------------------------------------------- driver
+def seen(A, V, e):
+    """sum_k (v_k^T A e)^2 / (v_k^T A v_k) / e^T A e: the energy the 1-D minimizations over the
+    columns of V would remove from e if applied additively (how well the family 'sees' the mode)."""
+    g = V.T @ (A @ e)
+    dv = np.asarray(V.multiply(A @ V).sum(0)).ravel()
+    return float((g ** 2 / dv).sum() / (e @ (A @ e)))
+
+
+def seen_blocks(A, groups, e):
+    """The same for exact solves on blocks of nodes (groups: arrays of node positions)."""
+    r = A @ e
+    s = 0.0
+    for g in groups:
+        dd = np.c_[2 * g, 2 * g + 1].ravel()
+        s += r[dd] @ np.linalg.solve(A[dd][:, dd].toarray(), r[dd])
+    return s / (e @ (A @ e))
+
+
+def part_modes(level):
+    h = hierarchy(level)
+    lv, Ps, _, frees = levels_of(h)
+    m, free, A = h.finest, frees[-1], lv[-1].A
+    K, Kl = element_matrices(m.points, m.cells)
+    pos = -np.ones(m.num_points, int)
+    pos[free] = np.arange(len(free))
+    nodes = [np.array([i]) for i in range(len(free))]
+    cells = [pos[c][pos[c] >= 0] for c in m.cells]
+    fams = {"cell rotation": cell_rotations(m, free), "patch rotation": patch_rotations(m, free),
+            "edge normal": edge_modes(m, free, ("normal",)), "edge tangent": edge_modes(m, free, ("tangent",))}
+    print(f"modes: unit square level {level}, {A.shape[0]} dofs, two-grid nodal SSOR(3,3) with an exact coarse solve")
+    x = m.points[m.cells]
+    J = np.stack([x[:, 1] - x[:, 0], x[:, 2] - x[:, 0]], axis=2)
+    grad = np.einsum("kr,crs->cks", np.array([[-1.0, -1.0], [1.0, 0.0], [0.0, 1.0]]), np.linalg.inv(J))
+    area = 0.5 * np.abs(np.linalg.det(J))
+    print("  omega  eig   lambda-share  10%-cells  rot^2/|grad|^2  div^2/|grad|^2  coarse-share | seen by: node  cell(6x6)"
+          "  " + "  ".join(fams))
+    for om in (1.0, 1.3):
+        w, vecs = slow_modes(lv, Ps, 3, om, k=3)
+        for j in range(3):
+            e = vecs[:, j]
+            ue = np.zeros((m.num_points, 2))
+            ue[free] = e.reshape(-1, 2)
+            loc = ue[m.cells].reshape(len(m.cells), 6)
+            ek = np.einsum("ca,cab,cb->c", loc, K, loc)
+            el = np.einsum("ca,cab,cb->c", loc, Kl, loc)
+            gu = np.einsum("cks,ckt->cts", grad, ue[m.cells])
+            g2 = np.sum(area * (gu ** 2).sum((1, 2)))
+            rot = 0.5 * (gu[:, 1, 0] - gu[:, 0, 1])
+            div = gu[:, 0, 0] + gu[:, 1, 1]
+            top = np.sort(ek)[::-1][: len(ek) // 10].sum() / ek.sum()
+            print(f"  {om:4.1f} {w[j]:6.3f}   {el.sum() / ek.sum():6.3f}     {top:6.3f}      {np.sum(area * rot ** 2) / g2:6.3f}"
+                  f"          {np.sum(area * div ** 2) / g2:6.3f}        {captured(A, Ps[-1], e):6.3f}   |        "
+                  f"{seen_blocks(A, nodes, e):5.3f}  {seen_blocks(A, cells, e):5.3f}  "
+                  + "  ".join(f"{seen(A, V, e):{len(k)}.3f}" for k, V in fams.items()), flush=True)
+
+
+def part_rates(level):
+    h = hierarchy(level)
+    lv, Ps, _, frees = levels_of(h)
+    A = lv[-1].A
+    wn = work_nodal(A)
+    top = len(lv) - 1
+    print(f"rates: unit square level {level}, {A.shape[0]} dofs; V-cycle rate, work per cycle in nodal fine sweeps"
+          " (the smoother's fine-level work only; the grid transfers and coarse levels come on top of every variant alike)")
+    print(f"  {'variant':58} {'rate':>6} {'work':>6} {'rate^(1/work)':>13}")
+
+    def row(name, r, work):
+        print(f"  {name:58} {r:6.3f} {work:6.1f} {r ** (1.0 / work):13.3f}", flush=True)
+
+    def sorn(l, x, b, om, fw, n):
+        for _ in range(n):
+            x = lv[l].sor(x, b, om, fw)
+        return x
+
+    for om in (1.0, 1.3):
+        for nu in (3, 4, 6):
+            row(f"nodal SSOR omega {om} V({nu},{nu})", rate_norms(lv, Ps, nu, om), 2 * nu)
+    fams = {"cell rotation": cell_rotations, "patch rotation": patch_rotations,
+            "edge normal": lambda m, f: edge_modes(m, f, ("normal",)), "edge normal+tangent": edge_modes}
+    for name, f in fams.items():
+        ex = {l: SubspaceGS(lv[l].A, f(h.meshes[l], frees[l])) for l in range(1, len(lv))}
+        wl = work_subspace_local(A, ex[top].V) / wn
+        wg = work_subspace(A, ex[top]) / wn
+        for nu in (2, 3):
+            row(f"nodal 1.3 + {name} after every sweep V({nu},{nu}) [local]", rate_norms(lv, Ps, nu, 1.3, ex), 2 * nu * (1 + wl))
+        row(f"  the same V(3,3), done on the stored G = V^T A V", rate_norms(lv, Ps, 3, 1.3, ex), 6 * (1 + wg))
+    ex = {l: SubspaceGS(lv[l].A, patch_rotations(h.meshes[l], frees[l])) for l in range(1, len(lv))}
+    wg = work_subspace(A, ex[top]) / wn
+    pre = lambda l, x, b: ex[l].apply(lv[l].A, sorn(l, x, b, 1.3, True, 3), b, True)  # noqa: E731
+    post = lambda l, x, b: sorn(l, ex[l].apply(lv[l].A, x, b, False), b, 1.3, False, 3)  # noqa: E731
+    row("nodal 1.3 V(3,3) + one patch-rotation pass pre and post [G]", rate_gen(lv, Ps, pre, post), 6 + 2 * wg)
+    for om in (1.0, 1.3):
+        sm = {l: AggregateSOR(lv[l].A, aggregates(h.meshes[l], frees[l], "cells"), om) for l in range(1, len(lv))}
+        extra = (sm[top].block_entries * 2 - 8 * (A.shape[0] // 2)) / wn  # block solves beyond the 2x2 ones
+        for nu in (3, 4):
+            row(f"non-overlapping cell aggregates (6x6 blocks) SOR {om} V({nu},{nu})", rate_agg(lv, Ps, sm, nu, om), 2 * nu * (1 + extra))
+    lm = {l: lambda_max(lv[l].A, lv[l].Dinv) for l in range(1, len(lv))}
+    for k in (3, 6):
+        f = lambda l, x, b: chebyshev(lv[l].A, lv[l].Dinv, x, b, k, lm[l], 8.0)  # noqa: E731
+        row(f"Chebyshev, block Jacobi, [lmax/8, lmax], degree {k} V", rate_gen(lv, Ps, f, f), 2 * k)
+    for wpre, wpost in ((1.3, 1.3), (1.4, 1.4), (1.0, 1.4), (1.2, 1.5), (1.0, 1.6), (1.0, 1.7), (1.0, 1.8), (1.8, 1.0), (0.9, 1.7)):
+        for nu in (3,) if (wpre, wpost) != (1.0, 1.7) else (2, 3, 4):
+            r = rate_gen(lv, Ps, lambda l, x, b: sorn(l, x, b, wpre, True, nu),
+                         lambda l, x, b: sorn(l, x, b, wpost, False, nu), cycles=30)
+            row(f"nodal SOR, omega {wpre} pre / {wpost} post, V({nu},{nu})", r, 2 * nu)
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--parts", nargs="+", default=["modes", "rates"])
+    ap.add_argument("--mode-level", type=int, default=5)
+    ap.add_argument("--levels", type=int, nargs="+", default=[6])
+    args = ap.parse_args()
+    t0 = time.perf_counter()
+    if "modes" in args.parts:
+        part_modes(args.mode_level)
+    if "rates" in args.parts:
+        for L in args.levels:
+            part_rates(L)
+    print(f"({time.perf_counter() - t0:.0f} s)")
+
+
+if __name__ == "__main__":
+    main()

@@ -614,6 +614,8 @@ class ContactProblem:
         res.setup_seconds = self.assembly_seconds + self._build_seconds.get(self._solver_key(options), 0.0)
         res.extra["cycle_options"] = {"cycle": options.cycle, "nu1": options.nu1, "nu2": options.nu2}
         res.extra["omega"] = float(raw.get("omega", 1.0))
+        if "omega_post" in raw:  # only when set (issue 11, fifth part)
+            res.extra["omega_post"] = float(raw["omega_post"])
         if method == "fixed-point" and "outer_changes" in raw:
             res.extra["outer_changes"] = [float(c) for c in raw["outer_changes"]]
         if "threads" in raw:
