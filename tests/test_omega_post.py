@@ -86,3 +86,13 @@ def test_algorithm2_same_solution_with_split_omega(adaptive8):
     la = p.solve("linear", reference=a, omega=1.3, omega_post=1.3)
     lb = p.solve("linear", reference=b)
     assert lb.cycles <= la.cycles, (lb.cycles, la.cycles)
+
+
+@pytest.mark.parametrize("method", ["tnnmg", "fixed-point"])
+def test_other_methods_take_omega_post(method):
+    p = hertz_problem("triangle", 4, 0.4)
+    ref = p.solve()
+    r = p.solve(method, omega=1.0, omega_post=1.7)
+    assert r.converged, r.status
+    assert r.extra["omega_post"] == 1.7
+    assert np.abs(r.displacement - ref.displacement).max() <= 1e-9 * np.abs(ref.displacement).max()
