@@ -3,10 +3,13 @@
 count (rate per cycle, size of the first correction).
 
     python benchmarks/cycle_growth.py [--parts linear alg2 uniform nu] [--levels 3 5 7 9 11]
-        [--frictions 0.08 0.4 2] [--uniform-levels 3 8] [--omega 1.0] [--json out/cycle_growth.json]
+        [--frictions 0.08 0.4 2] [--uniform-levels 3 8] [--omega 1.0] [--omega-post 1.7]
+        [--json out/cycle_growth.json]
 
 --omega sets ContactProblem.smoother_omega for every solve (default: the problems' own default, 1.4
-on triangles since issue 11; 1.0 gives the plain Gauss-Seidel of the measurements before it).
+on triangles since issue 11; 1.0 gives the plain Gauss-Seidel of the measurements before it);
+--omega-post sets ContactProblem.smoother_omega_post (the post-smoothing sweeps' own; --omega 1 --omega-post 1.7
+is the split relaxation of issue 11, fifth part).
 
 Variants of the same adaptive hierarchy (hertz_adaptive_hierarchy(11), cached in
 out/cache/hertz_adaptive_11.pkl; the same cells on every variant):
@@ -165,9 +168,12 @@ def main():
     ap.add_argument("--variants", nargs="+", default=["projected", "barycentric"])
     ap.add_argument("--uniform-levels", type=int, nargs=2, default=[3, 8])
     ap.add_argument("--omega", type=float, default=None)
+    ap.add_argument("--omega-post", type=float, default=None,
+                    help="ContactProblem.smoother_omega_post: the post-smoothing sweeps' own omega (issue 11, fifth part)")
     ap.add_argument("--json")
     a = ap.parse_args()
     ContactProblem.smoother_omega = a.omega
+    ContactProblem.smoother_omega_post = a.omega_post
     rows = []
     full = adaptive_hierarchy(max(a.levels)) if set(a.parts) & {"linear", "alg2", "nu"} else None
     if "linear" in a.parts:

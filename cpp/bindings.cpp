@@ -281,7 +281,7 @@ void bind_dim(py::module_& m) {
       .def("solve", [](CS& S, py::object u0, double tol, double rtol, int max_cycles, bool fixed_point, double fp_tol,
                        int fp_max, py::object reference, py::object cycle, py::object nu1, py::object nu2, py::object progress,
                        bool tnnmg, py::object ordering, int threads, int fp_stall, py::object linear, py::object lines,
-                       py::object omega) {
+                       py::object omega, py::object omega_post) {
              SolveOptions o;
              if (fp_stall < 0) throw InputError("fixed_point_stall_window must be >= 0 (0: off)");
              o.fixed_point_stall_window = fp_stall;
@@ -296,6 +296,10 @@ void bind_dim(py::module_& m) {
              if (!linear.is_none()) co.linear = parse_linear_correction(linear.cast<std::string>());
              if (!lines.is_none()) co.lines = lines.cast<bool>();
              if (!omega.is_none()) co.omega = omega.cast<double>();
+             if (!omega_post.is_none()) {
+               co.omega_post = omega_post.cast<double>();
+               check_omega(co.omega_post);
+             }
              check_smoothing_steps(co.nu1, co.nu2);
              check_omega(co.omega);
              if (threads < 0) throw InputError("threads must be >= 0 (0: all cores)");
@@ -338,6 +342,7 @@ void bind_dim(py::module_& m) {
              out["cycle_type"] = std::string(cycle_name(co.cycle)) + "(" + std::to_string(co.nu1) + "," + std::to_string(co.nu2) + ")";
              out["ordering"] = ordering_name(co.ordering);
              out["omega"] = co.omega;
+             if (co.omega_post > 0) out["omega_post"] = co.omega_post;
              if (tnnmg) { out["linear_correction"] = linear_correction_name(co.linear); out["lines"] = co.lines; }
              out["threads"] = threads == 0 ? max_threads() : (have_openmp() ? threads : 1);
              return out;
@@ -348,7 +353,9 @@ void bind_dim(py::module_& m) {
            py::arg("nu2") = py::none(), py::arg("progress") = py::none(), py::arg("tnnmg") = false,
            py::arg("ordering") = py::none(), py::arg("threads") = 0, py::arg("fixed_point_stall_window") = 0,
            py::arg("linear") = py::none(), py::arg("lines") = py::none(), py::arg("omega") = py::none(),
+           py::arg("omega_post") = py::none(),
            "omega: over-relaxation of the unbounded block solves of every sweep (default 1, in (0, 2)); "
+           "omega_post: the same for the post-smoothing sweeps only (tnnmg: on its coarse levels; default: omega); "
            "linear (tnnmg): its linear correction, 'pcg' (default), 'cycle' or 'coarse'; lines (tnnmg): line "
            "smoothing in it where the level matrices have lines (default True); "
            "tnnmg: truncated nonsmooth Newton multigrid steps instead of monotone multigrid cycles; "

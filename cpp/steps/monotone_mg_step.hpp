@@ -96,7 +96,7 @@ class MonotoneMultigridStep {
                   P_.num_nodes(), true);
     if (tied_) tied_->apply(P_, opt_, u.data());  // two bodies: the common motions, no bounds
     pc.lap(Phase::CoarseCorrection);
-    for (int s = 0; s < opt_.nu2; ++s) Smoother::sweep(P_, u.data(), false, order_);
+    for (int s = 0; s < opt_.nu2; ++s) Smoother::sweep(P_, u.data(), false, order_, opt_.omega_post);
     pc.lap(Phase::PostSmooth);
     if constexpr (L::coarse_freezes_bound) {
       // old_ = x (before the cycle), u = G(x): mix the cycles (settled_anderson.hpp).

@@ -17,23 +17,27 @@ inline bool& fine_sweep_generic() {
 
 template <int d, class L>
 struct NonlinearGaussSeidel {
-  static void sweep(const ContactProblem<d>& P, double* u, bool forward, const SweepOrder& order = SweepOrder()) {
+  // omega: the over-relaxation of the rows without contact (< 0: the problem's smoothing_omega();
+  // CycleOptions::omega_post gives the post-smoothing sweeps their own).
+  static void sweep(const ContactProblem<d>& P, double* u, bool forward, const SweepOrder& order = SweepOrder(),
+                    double omega = -1.0) {
+    if (!(omega > 0)) omega = P.smoothing_omega();
     if (order.contiguous() && !fine_sweep_generic()) {
-      order.visit_ranges(forward, [&](Index b, Index e) { sweep_range(P, u, b, e); });
+      order.visit_ranges(forward, [&](Index b, Index e) { sweep_range(P, u, b, e, omega); });
       return;
     }
-    order.visit(P.matrix().rows, forward, [&](Index i) { row_update(P, u, i); });
+    order.visit(P.matrix().rows, forward, [&](Index i) { row_update(P, u, i, omega); });
   }
 
   // Row i, whatever it is: the law's nodal solve at a contact node, the diagonal block's inverse
   // (a special one where kept) elsewhere.
-  static void row_update(const ContactProblem<d>& P, double* u, Index i) {
+  static void row_update(const ContactProblem<d>& P, double* u, Index i, double omega = -1.0) {
     const BlockMatrix<d>& A = P.matrix();
     const Vec<d> b = local_rhs<d>(A, u, P.load().data(), i);
     VecMap<d> ui(u + d * i);
     const Index c = L::has_contact ? P.contact_of_node(i) : -1;
     if (c < 0) {
-      relaxed_assign<d>(ui, P.diagonal_inverse(i) * b, P.smoothing_omega());
+      relaxed_assign<d>(ui, P.diagonal_inverse(i) * b, omega > 0 ? omega : P.smoothing_omega());
       return;
     }
     const Mat<d> B = A.block(A.diag[i]);
@@ -46,7 +50,7 @@ struct NonlinearGaussSeidel {
   // columns of the row kPrefetchRows ahead (the neighbours' x are in other colours' ranges: their
   // loads stalled the sweep, issue 15). The rest go through row_update, out of line. The same
   // sums and products in the same order as row_update: the same bits (the test above).
-  static void sweep_range(const ContactProblem<d>& P, double* u, Index b, Index e) {
+  static void sweep_range(const ContactProblem<d>& P, double* u, Index b, Index e, double omega) {
     using CP = ContactProblem<d>;
     const BlockMatrix<d>& A = P.matrix();
     const double* values = A.values.data();
@@ -57,14 +61,13 @@ struct NonlinearGaussSeidel {
     const std::uint8_t* flags = P.row_flags();
     // law::Linear has no contact rows: its contact nodes only carry frames (row_update's c < 0)
     const std::uint8_t other = L::has_contact ? (CP::kSpecialInverse | CP::kContactRow) : CP::kSpecialInverse;
-    const double omega = P.smoothing_omega();
     const Index n = A.rows;
     const Index ahead = prefetch_value_rows();
     for (Index i = b; i < e; ++i) {
       if (i + kPrefetchRows < n) prefetch_block_columns<d>(cols, ptr[i + kPrefetchRows], ptr[i + kPrefetchRows + 1], u);
       prefetch_row_values<d>(values, ptr, i, ahead, n);
       if (flags[i] & other) {
-        other_row(P, u, i);
+        other_row(P, u, i, omega);
         continue;
       }
       const Index kd = diag[i];  // >= 0: a row without a diagonal block has a special inverse
@@ -77,7 +80,9 @@ struct NonlinearGaussSeidel {
   }
 
  private:
-  __attribute__((noinline)) static void other_row(const ContactProblem<d>& P, double* u, Index i) { row_update(P, u, i); }
+  __attribute__((noinline)) static void other_row(const ContactProblem<d>& P, double* u, Index i, double omega) {
+    row_update(P, u, i, omega);
+  }
 };
 
 }  // namespace cmg

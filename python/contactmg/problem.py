@@ -37,6 +37,8 @@ SOLVE_TAKES_LINEAR = "linear (tnnmg)" in (_core.ContactSolver2D.solve.__doc__ or
 LINEAR_CORRECTIONS = ("pcg", "cycle", "coarse")
 # Issue 11: over-relaxation (omega) of the unbounded block solves of every Gauss-Seidel sweep per solve
 SOLVE_TAKES_OMEGA = "omega:" in (_core.ContactSolver2D.solve.__doc__ or "")
+# Issue 11, fifth part: a separate over-relaxation of the post-smoothing sweeps (off by default)
+SOLVE_TAKES_OMEGA_POST = "omega_post:" in (_core.ContactSolver2D.solve.__doc__ or "")
 # The default omega by cell type. Simplices: 1.3 (symmetric SOR). Nodal block Gauss-Seidel on P1
 # elasticity levels off near 0.34 per F(3,3) cycle on the adaptive Hertz levels (Q1: 0.14 on the
 # unit square); over-relaxed it contracts by 0.26 / 0.235 / 0.216 / 0.216 at level 11 with omega
@@ -415,6 +417,9 @@ class ContactProblem:
     # Over-relaxation of the smoothers' unbounded block solves (CycleOptions::omega in the core):
     # None = DEFAULT_OMEGA of the mesh's cell type (1 where it has none); a number in (0, 2) forces it.
     smoother_omega: Optional[float] = None
+    # The post-smoothing sweeps' own over-relaxation (CycleOptions::omega_post; None: the same as
+    # the pre-smoothing's). Off by default (issue 11, fifth part).
+    smoother_omega_post: Optional[float] = None
 
     def smoothing_omega(self) -> float:
         """The over-relaxation the solves of this problem use (smoother_omega or the default)."""
@@ -499,7 +504,7 @@ class ContactProblem:
               progress: Optional[Callable[[dict], None]] = None, threads: int = 0,
               ordering: Optional[str] = None, fixed_point_stall_window: int = 0,
               linear: Optional[str] = None, lines: Optional[bool] = None,
-              omega: Optional[float] = None) -> ContactResult:
+              omega: Optional[float] = None, omega_post: Optional[float] = None) -> ContactResult:
         """Solve with `method`: "nmg" (Algorithm 2 for Coulomb; truncated monotone multigrid for
         frictionless and Tresca; linear multigrid without contact), "tnnmg" (truncated nonsmooth
         Newton multigrid: the fine nonlinear sweeps, one linear cycle for the truncated Newton
@@ -521,7 +526,8 @@ class ContactProblem:
         change of s_n has not fallen below the one that many outer iterations before (0: run to
         fixed_point_max); result.extra["outer_changes"] holds the change of every outer iteration.
         `omega`: over-relaxation of the unbounded block solves of every sweep (fine nodes without
-        contact, coarse rows without bounds), in (0, 2); None: smoothing_omega()."""
+        contact, coarse rows without bounds), in (0, 2); None: smoothing_omega(). `omega_post`: the
+        same for the post-smoothing sweeps only; None: smoother_omega_post, or omega if that is None."""
         if method not in METHODS:
             raise ValueError(f"method must be one of {METHODS}, got {method!r}")
         options = self._options(cycle, nu1, nu2)
@@ -563,6 +569,12 @@ class ContactProblem:
             kw["omega"] = omega
         elif omega != 1.0:
             raise ValueError("omega needs a core with over-relaxed sweeps (issue 11)")
+        omega_post = self.smoother_omega_post if omega_post is None else omega_post
+        if omega_post is not None:
+            omega_post = _checked_omega(omega_post)
+            if not SOLVE_TAKES_OMEGA_POST:
+                raise ValueError("omega_post needs a core built with it (issue 11, fifth part)")
+            kw["omega_post"] = omega_post
         if SOLVE_TAKES_CYCLE_OPTIONS:
             kw.update(cycle=options.cycle, nu1=options.nu1, nu2=options.nu2, progress=progress)
         elif progress is not None:
@@ -586,7 +598,8 @@ class ContactProblem:
             return self._result(solver.solve(u0, **kw), method, options)
         if reference is None:
             reference = self.solve("nmg", tol=tol, rtol=rtol, max_cycles=max_cycles, cycle=options.cycle,
-                                   nu1=options.nu1, nu2=options.nu2, threads=threads, ordering=ordering, omega=omega)
+                                   nu1=options.nu1, nu2=options.nu2, threads=threads, ordering=ordering, omega=omega,
+                                   omega_post=omega_post)
         t0 = time.perf_counter()
         solver = self._known_state_solver(reference, options)
         build = time.perf_counter() - t0
@@ -604,6 +617,8 @@ class ContactProblem:
         res.setup_seconds = self.assembly_seconds + self._build_seconds.get(self._solver_key(options), 0.0)
         res.extra["cycle_options"] = {"cycle": options.cycle, "nu1": options.nu1, "nu2": options.nu2}
         res.extra["omega"] = float(raw.get("omega", 1.0))
+        if "omega_post" in raw:  # only when set (issue 11, fifth part)
+            res.extra["omega_post"] = float(raw["omega_post"])
         if method == "fixed-point" and "outer_changes" in raw:
             res.extra["outer_changes"] = [float(c) for c in raw["outer_changes"]]
         if "threads" in raw:
