@@ -571,7 +571,7 @@ class ContactProblem:
             raise ValueError("omega needs a core with over-relaxed sweeps (issue 11)")
         omega_post = self.smoother_omega_post if omega_post is None else omega_post
         if omega_post is not None:
-            omega_post = _checked_omega(omega_post)
+            omega_post = _checked_omega(omega_post, "omega_post")
             if not SOLVE_TAKES_OMEGA_POST:
                 raise ValueError("omega_post needs a core built with it (issue 11, fifth part)")
             kw["omega_post"] = omega_post
@@ -653,9 +653,9 @@ class ContactProblem:
         return cf, ref.friction_bound.copy(), ref.node_state[self.contact.nodes].copy()
 
 
-def _checked_omega(w) -> float:
+def _checked_omega(w, name: str = "omega") -> float:
     if isinstance(w, (bool, np.bool_)) or not (isinstance(w, numbers.Real) and 0 < w < 2):
-        raise ValueError(f"omega must be a number in (0, 2), got {w!r}")
+        raise ValueError(f"{name} must be a number in (0, 2), got {w!r}")
     return float(w)
 
 
