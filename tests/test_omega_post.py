@@ -43,7 +43,7 @@ def test_off_by_default_and_bad_values():
     np.testing.assert_array_equal(same.displacement, r.displacement)
     assert p.solve(omega=1.0, omega_post=1.7).extra["omega_post"] == 1.7
     for bad in (0.0, 2.0, -1.0, True, "1.2", float("nan")):
-        with pytest.raises(ValueError, match="omega_post must be a number in \(0, 2\)"):
+        with pytest.raises(ValueError, match=r"omega_post must be a number in \(0, 2\)"):
             p.solve(omega_post=bad)
 
 
