@@ -28,7 +28,9 @@ twogrid    a scipy model of the settled cycle as a linear map on the error (cont
            coarse right-hand side r - sign F r_n(u) e_T is J e). Spectral radii by ARPACK (eigs,
            largest magnitude) on the error map; also the smoother alone (L <= 7) and the two-grid
            map without friction coupling (J replaced by K: the sliding rows as K rows, "Tresca-like").
-modes      where the slowest mode of the frozen, the PG and the smoother-alone maps lives.
+modes      where the slowest mode of the frozen, the PG and the smoother-alone maps lives, and
+           Gauss-Seidel on the sliding chain alone (the J block of the sliding tangentials).
+chain      the two-grid maps with an exact solve of that J block after every sweep.
 
 Measured 2026-12-03 on branch smooth5 (1 thread): benchmarks/results/friction_growth_diagnosis_smooth6.txt,
 docs/history/adaptive.md "Issue 11, sixth part".
@@ -134,14 +136,14 @@ def corerate(a):
 
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("mode", choices=["histories", "corerate", "twogrid", "modes"])
+    ap.add_argument("mode", choices=["histories", "corerate", "twogrid", "modes", "chain"])
     ap.add_argument("--levels", type=int, nargs="+", default=[7, 9, 11])
     ap.add_argument("--frictions", type=float, nargs="+", default=[0.4, 0.7, 2.0, 5.0, 8.0, 12.0, 20.0])
     ap.add_argument("--steps", type=int, default=16)
     ap.add_argument("--json")
     a = ap.parse_args()
     t0 = time.perf_counter()
-    out = {"histories": histories, "corerate": corerate, "twogrid": twogrid, "modes": modes}[a.mode](a)
+    out = {"histories": histories, "corerate": corerate, "twogrid": twogrid, "modes": modes, "chain": chain}[a.mode](a)
     print(f"({time.perf_counter() - t0:.0f} s)")
     if a.json:
         os.makedirs(os.path.dirname(a.json) or ".", exist_ok=True)
@@ -220,17 +222,33 @@ class TwoGrid:
         self.Ac_nnz = int((self.PtT @ KP).nnz)
         self.slip_x = p.mesh.points[np.asarray(p.contact.nodes)[slip], 0] if slip.any() else np.array([])
 
-    def apply(self, e, coarse="galerkin", op="J", smooth=True):
+    def chain_solve(self, e):
+        """An exact solve of the sliding tangentials' J rows, every other component kept (a block
+        subspace correction of the whole sliding chain)."""
+        if not hasattr(self, "_chain"):
+            sl = np.nonzero(self.Jf.diagonal() != self.Kf.diagonal())[0]
+            self._chain = (sl, spla.splu(self.Jf[sl][:, sl].tocsc()) if len(sl) else None)
+        sl, lu = self._chain
+        if lu is not None:
+            e = e.copy()
+            e[sl] -= lu.solve((self.Jf[sl] @ e))
+        return e
+
+    def apply(self, e, coarse="galerkin", op="J", smooth=True, chain=False):
         A = self.Jf if op == "J" else self.Kf
         if smooth:
             for _ in range(self.nu):
                 e = e - self.fwd[op].solve(A @ e)
+                if chain:
+                    e = self.chain_solve(e)
         if coarse:
             ac = self.Ac[coarse] if op == "J" else self.Ac["galerkin"]
             e = e - self.Pt @ ac.solve(self.PtT @ (A @ e))
         if smooth:
             for _ in range(self.nu):
                 e = e - self.bwd[op].solve(A @ e)
+                if chain:
+                    e = self.chain_solve(e)
         return e
 
     def radius(self, k=4, **kw):
@@ -285,6 +303,27 @@ def modes(a):
                 rows.append({"level": L, "F": F, "map": name, "eig": [float(w[i].real), float(w[i].imag)],
                              "top20_energy": float(en[top].sum()), "x": xs, "y": ys})
     return {"mode": "modes", "runs": rows}
+
+
+def chain(a):
+    """The two-grid maps with an exact solve of the sliding chain's J block after every sweep."""
+    H = adaptive_hierarchy(11)
+    rows = []
+    print("two-grid model + an exact sliding-chain solve after every sweep: spectral radii")
+    print("| L | F | sliding | frozen (a) | frozen + chain | PG (b) + chain |")
+    print("|---|---|---|---|---|---|")
+    for L in a.levels:
+        for F in a.frictions:
+            if not os.path.exists(sol_path(L, F)):
+                continue
+            T = TwoGrid(H, L, F, np.load(sol_path(L, F)))
+            r = {"level": L, "F": F, "sliding": T.rank}
+            r["frozen"], _ = T.radius(coarse="galerkin")
+            r["frozen_chain"], _ = T.radius(coarse="galerkin", chain=True)
+            r["petrov_chain"], _ = T.radius(coarse="petrov", chain=True)
+            rows.append(r)
+            print(f"| {L} | {F:g} | {T.rank} | {r['frozen']:.3f} | {r['frozen_chain']:.3f} | {r['petrov_chain']:.3f} |", flush=True)
+    return {"mode": "chain", "runs": rows}
 
 
 def twogrid(a):
