@@ -31,6 +31,8 @@ twogrid    a scipy model of the settled cycle as a linear map on the error (cont
 modes      where the slowest mode of the frozen, the PG and the smoother-alone maps lives, and
            Gauss-Seidel on the sliding chain alone (the J block of the sliding tangentials).
 chain      the two-grid maps with an exact solve of that J block after every sweep.
+threegrid  level L-1 smoothed instead of solved (L-2 exact): the PG term on L-1 only against
+           everywhere and against today's symmetric levels.
 
 Measured 2026-12-03 on branch smooth5 (1 thread): benchmarks/results/friction_growth_diagnosis_smooth6.txt,
 docs/history/adaptive.md "Issue 11, sixth part".
@@ -136,14 +138,14 @@ def corerate(a):
 
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("mode", choices=["histories", "corerate", "twogrid", "modes", "chain"])
+    ap.add_argument("mode", choices=["histories", "corerate", "twogrid", "modes", "chain", "threegrid"])
     ap.add_argument("--levels", type=int, nargs="+", default=[7, 9, 11])
     ap.add_argument("--frictions", type=float, nargs="+", default=[0.4, 0.7, 2.0, 5.0, 8.0, 12.0, 20.0])
     ap.add_argument("--steps", type=int, default=16)
     ap.add_argument("--json")
     a = ap.parse_args()
     t0 = time.perf_counter()
-    out = {"histories": histories, "corerate": corerate, "twogrid": twogrid, "modes": modes, "chain": chain}[a.mode](a)
+    out = {"histories": histories, "corerate": corerate, "twogrid": twogrid, "modes": modes, "chain": chain, "threegrid": threegrid}[a.mode](a)
     print(f"({time.perf_counter() - t0:.0f} s)")
     if a.json:
         os.makedirs(os.path.dirname(a.json) or ".", exist_ok=True)
@@ -204,8 +206,12 @@ class TwoGrid:
         inj = (rowcount[Pc.row] == 1) & np.isclose(np.abs(Pc.data), 1.0)
         cfixed = np.zeros(P.shape[1], bool)
         cfixed[Pc.col[inj]] = S["fixed"][Pc.row[inj]]
-        Pt = P[fr][:, np.nonzero(~cfixed)[0]].tocsc()
-        Pt = Pt[:, np.nonzero(np.diff(Pt.indptr) > 0)[0]].tocsr()
+        ckeep = np.nonzero(~cfixed)[0]
+        Pt = P[fr][:, ckeep].tocsc()
+        nonempty = np.nonzero(np.diff(Pt.indptr) > 0)[0]
+        Pt = Pt[:, nonempty].tocsr()
+        self.ckeep = ckeep[nonempty]  # level L-1 dofs of the coarse space
+        self.Hl, self.omega = Hl, omega
         self.ncoarse = Pt.shape[1]
         self.Kf, self.Jf, self.Pt, self.PtT = Kf, Jf, Pt, Pt.T.tocsr()
         self.nu = nu
@@ -221,6 +227,40 @@ class TwoGrid:
         self.pg_rows, self.pg_nnz = int(np.count_nonzero(np.diff(D.indptr))), int(D.nnz)
         self.Ac_nnz = int((self.PtT @ KP).nnz)
         self.slip_x = p.mesh.points[np.asarray(p.contact.nodes)[slip], 0] if slip.any() else np.array([])
+
+    def three_grid(self, top="galerkin", below="galerkin"):
+        """Level L-1 as a smoothed level instead of an exact solve: its matrix is `top` (the
+        symmetric Galerkin or the PG one), 3 forward / 3 backward block-SOR sweeps on it (omega
+        on every node; the core keeps 1 on bounded rows) around an exact solve on level L-2 with
+        P2^T A P2, A = the symmetric (`below` = "galerkin") or the PG (`below` = "petrov") level
+        L-1 matrix: the restricted PG term (PG on L-1 only) is top = petrov, below = galerkin."""
+        Pn2 = self.Hl.transfers[-2].matrix().tocsr()
+        P2 = sp.kron(Pn2, sp.identity(2), format="csr")[self.ckeep]
+        Pc = P2.tocoo()
+        rowcount = np.bincount(Pc.row, minlength=P2.shape[0])
+        inj = (rowcount[Pc.row] == 1) & np.isclose(np.abs(Pc.data), 1.0)
+        has_injected_row = np.zeros(P2.shape[1], bool)
+        has_injected_row[Pc.col[inj]] = True
+        P2 = P2.tocsc()
+        cols = np.nonzero((np.diff(P2.indptr) > 0) & has_injected_row)[0]  # L-2 dofs injected into a kept L-1 dof
+        P2 = P2[:, cols].tocsr()
+        A1 = {"galerkin": (self.PtT @ self.Kf @ self.Pt).tocsr(), "petrov": (self.PtT @ self.Jf @ self.Pt).tocsr()}
+        At = A1[top]
+        node_of = self.ckeep // 2
+        om = np.full(len(node_of), self.omega)
+        fw, bw = _block_sor_factor(At, node_of, om, True), _block_sor_factor(At, node_of, om, False)
+        A2 = spla.splu((P2.T @ A1[below] @ P2).tocsc())
+        P2T = P2.T.tocsr()
+
+        def coarse_solve(rc):
+            x = np.zeros_like(rc)
+            for _ in range(self.nu):
+                x += fw.solve(rc - At @ x)
+            x += P2 @ A2.solve(P2T @ (rc - At @ x))
+            for _ in range(self.nu):
+                x += bw.solve(rc - At @ x)
+            return x
+        return coarse_solve
 
     def chain_solve(self, e):
         """An exact solve of the sliding tangentials' J rows, every other component kept (a block
@@ -241,7 +281,9 @@ class TwoGrid:
                 e = e - self.fwd[op].solve(A @ e)
                 if chain:
                     e = self.chain_solve(e)
-        if coarse:
+        if callable(coarse):
+            e = e - self.Pt @ coarse(self.PtT @ (A @ e))
+        elif coarse:
             ac = self.Ac[coarse] if op == "J" else self.Ac["galerkin"]
             e = e - self.Pt @ ac.solve(self.PtT @ (A @ e))
         if smooth:
@@ -324,6 +366,27 @@ def chain(a):
             rows.append(r)
             print(f"| {L} | {F:g} | {T.rank} | {r['frozen']:.3f} | {r['frozen_chain']:.3f} | {r['petrov_chain']:.3f} |", flush=True)
     return {"mode": "chain", "runs": rows}
+
+
+def threegrid(a):
+    """Three-grid model: L, L-1 smoothed (3 / 3 block SOR on its matrix), L-2 exact."""
+    H = adaptive_hierarchy(11)
+    rows = []
+    print("three-grid model (L fine, L-1 smoothed, L-2 exact): spectral radii; level L-1 matrix / level L-2 from")
+    print("| L | F | sliding | sym / sym (today's) | PG / sym (PG on L-1 only) | PG / PG |")
+    print("|---|---|---|---|---|---|")
+    for L in a.levels:
+        for F in a.frictions:
+            if not os.path.exists(sol_path(L, F)):
+                continue
+            T = TwoGrid(H, L, F, np.load(sol_path(L, F)))
+            r = {"level": L, "F": F, "sliding": T.rank}
+            for key, (top, below) in (("sym_sym", ("galerkin", "galerkin")), ("pg_sym", ("petrov", "galerkin")),
+                                      ("pg_pg", ("petrov", "petrov"))):
+                r[key], _ = T.radius(coarse=T.three_grid(top, below))
+            rows.append(r)
+            print(f"| {L} | {F:g} | {T.rank} | {r['sym_sym']:.3f} | {r['pg_sym']:.3f} | {r['pg_pg']:.3f} |", flush=True)
+    return {"mode": "threegrid", "runs": rows}
 
 
 def twogrid(a):
