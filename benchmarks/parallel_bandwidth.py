@@ -4,6 +4,7 @@ two orders, and the memory per dof by owner.
     python benchmarks/parallel_bandwidth.py time   [--levels 8 9] [--levels3d 4] [--repeats 3] [--json out.json]
     python benchmarks/parallel_bandwidth.py counts [--levels 3 4 5 6 7 8 9] [--json out.json]
     python benchmarks/parallel_bandwidth.py memory --level 9 [--dim 2|3] [--cell C] [--json out.json]
+    (each with --float-coarse: the switch _core._float_coarse_values on)
 
 time: seconds per cycle for lexicographic (1, 2 threads), coloured in the user's order (1 thread:
 issue 15 before renumbering) and coloured stored by colours (1, 2 threads), the runs of one level
@@ -232,6 +233,9 @@ stages = {}
 def stage(name):
     stages[name] = {"rss": status("VmRSS"), "peak": status("VmHWM")}
 dim, level, cell = int(sys.argv[1]), int(sys.argv[2]), sys.argv[3]
+if len(sys.argv) > 4 and sys.argv[4] == "float-coarse":
+    from contactmg import _core
+    _core._float_coarse_values(True)
 stage("imports")
 if dim == 2:
     from contactmg.hertz import hertz_problem
@@ -263,10 +267,15 @@ print(json.dumps(dict(dim=dim, level=level, cell=cell, dofs=d * n, cycles=r.cycl
 '''
 
 
-def cli_peak_rss(dim: int, level: int, cell: str) -> int:
+# the CLI with the process-wide switch _core._float_coarse_values on (memory --float-coarse)
+CLI_FLOAT_COARSE = ("from contactmg import _core; _core._float_coarse_values(True); import runpy; "
+                    "runpy.run_module('contactmg', run_name='__main__')")
+
+
+def cli_peak_rss(dim: int, level: int, cell: str, float_coarse: bool = False) -> int:
     """Peak resident bytes of the CLI solve itself (`contactmg hertz --levels L` / `sphere --cell C`)
     in a fresh process."""
-    cmd = [sys.executable, "-m", "contactmg"] + (["hertz", "--cell", cell, "--levels", str(level), "--friction", "0.4"] if dim == 2 else
+    cmd = ([sys.executable, "-c", CLI_FLOAT_COARSE] if float_coarse else [sys.executable, "-m", "contactmg"]) + (["hertz", "--cell", cell, "--levels", str(level), "--friction", "0.4"] if dim == 2 else
                                                  ["sphere", "--cell", cell, "--levels", str(level)]) + ["--json", "-", "-q"]
     before = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
     out = subprocess.run(cmd, capture_output=True, text=True)
@@ -279,9 +288,9 @@ def cli_peak_rss(dim: int, level: int, cell: str) -> int:
 
 def cmd_memory(args):
     cell = args.cell or ("triangle" if args.dim == 2 else "hexahedron")
-    cli = cli_peak_rss(args.dim, args.level, cell)
-    out = subprocess.run([sys.executable, "-c", MEMORY_WORKER, str(args.dim), str(args.level), cell], capture_output=True,
-                         text=True)
+    cli = cli_peak_rss(args.dim, args.level, cell, args.float_coarse)
+    out = subprocess.run([sys.executable, "-c", MEMORY_WORKER, str(args.dim), str(args.level), cell] +
+                         (["float-coarse"] if args.float_coarse else []), capture_output=True, text=True)
     if out.returncode != 0:
         raise SystemExit(out.stderr)
     res = json.loads(out.stdout.strip().splitlines()[-1])
@@ -313,7 +322,12 @@ def main():
     m.add_argument("--cell", default=None, help="triangle (2D default), quad; hexahedron (3D default), tetra")
     for s in (t, c, m):
         s.add_argument("--json")
+        s.add_argument("--float-coarse", action="store_true",
+                       help="with the switch _core._float_coarse_values on (coarse values read as float; CLI and worker too)")
     args = ap.parse_args()
+    if args.float_coarse and args.cmd != "memory":
+        from contactmg import _core
+        _core._float_coarse_values(True)
     res = {"time": cmd_time, "counts": cmd_counts, "memory": cmd_memory}[args.cmd](args)
     if args.json:
         with open(args.json, "w") as fh:

@@ -589,6 +589,10 @@ PYBIND11_MODULE(_core, m) {
              "tests and benchmarks: a solver keeps the fine vectors of its cycles (r, u_old, the Anderson history) from one "
              "solve to the next (True, the default) or every solve allocates them again (False, as before); returns the "
              "previous setting (None: only returns it)");
+  def_switch(m, "_float_coarse_values", &float_coarse_values, "on",
+             "tests and benchmarks: the coarse levels but the coarsest also hold their matrix values rounded once to float, "
+             "and their sweeps, residuals and products read those (True) or only double values (False, the default); takes "
+             "effect from a solver's next solve or rebuild; returns the previous setting (None: only returns it)");
   m.def("anderson_iterates", [](DArr M, DArr c, DArr x0, int steps, int refuse_every, int threads) {
     const Index n = c.size(), m = M.ndim() == 2 ? M.shape(0) : 0;
     if (m < 1 || n % m != 0) throw InputError("M must be m x m with m dividing the length of c");

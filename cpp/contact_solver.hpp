@@ -324,6 +324,7 @@ class ContactSolver {
   }
 
   void start(const double* u0) {
+    H_.sync_float_values();  // the coarse float copies as float_coarse_values() says now
     std::vector<double> u_stored;
     if (u0 && !order_.back().identity()) {
       u_stored = order_.back().to_storage(u0, num_nodes(), d);

@@ -60,6 +60,17 @@ class GalerkinHierarchy {
       return factorize(S, f);
     });
   }
+  // The float copies of the coarse values (levels 1.., not the coarsest: its exact solve is double)
+  // brought to float_coarse_values(): made where the switch is on and a level has none, dropped
+  // where it is off (a solve calls this first, so the switch takes effect from the next solve).
+  void sync_float_values() {
+    const bool on = float_coarse_values();
+    for (int l = 1; l < (int)lv_.size(); ++l) {
+      BlockMatrix<d>& A = lv_[l].A;
+      if (!on) std::vector<float>().swap(A.values32);
+      else if (A.values32.size() != A.values.size()) A.round_values32();
+    }
+  }
   int coarsest_factorizations() const { return coarsest_.factorizations(); }
   int rebuilds() const { return rebuilds_; }
   double rebuild_seconds() const { return rebuild_seconds_; }
@@ -89,6 +100,8 @@ class GalerkinHierarchy {
       apply_deltas();
     }
     for (int l = 0; l < nc; ++l) factor_lines(l);
+    for (int l = 0; l < nc; ++l) lv_[l].A.values32.clear();
+    sync_float_values();
     factorize_coarsest(false);
     ++rebuilds_;
     incremental_ = 0;
@@ -180,6 +193,8 @@ class GalerkinHierarchy {
               add_delta(l - 1, Pl.indices[b], Pl.indices[b2], Pl.block(e.i, b).transpose() * e.M * Pl.block(e.j, b2));
       }
       for (const auto& e : delta_[l]) L.A.block(e.pos) += e.M;
+      if (!L.A.values32.empty())  // each changed block rounded once from its double values
+        for (const auto& e : delta_[l]) L.A.round_values32(e.pos, e.pos + 1);
       slot_[l].clear();
       for (const auto& e : delta_[l]) invert_diagonal<d>(L.A, L.Dinv, L.inert, L.scale, e.i, e.i + 1);
       if (!delta_[l].empty()) factor_lines(l);

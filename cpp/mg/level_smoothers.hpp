@@ -63,17 +63,23 @@ void invert_diagonal(const BlockMatrix<d>& A, std::vector<double>& Dinv, std::ve
 
 // b_i - sum_{k != i} A_ik x_k
 // (the blocks before and after the diagonal one in two loops: no test per block)
-template <int d>
-inline Vec<d> local_rhs(const BlockMatrix<d>& A, const double* x, const double* b, Index i) {
+// (vals: the values the row passes read, A.values or its float copy A.values32)
+template <int d, class V>
+inline Vec<d> local_rhs(const BlockMatrix<d>& A, const V* vals, const double* x, const double* b, Index i) {
   Vec<d> s = CVecMap<d>(b + d * i);
   const Index k0 = A.indptr[i], k1 = A.indptr[i + 1], kd = A.diag[i];
   if (kd < 0) {
-    accumulate_blocks<d, true>(A.values.data(), A.indices.data(), k0, k1, x, s.data());
+    accumulate_blocks<d, true>(vals, A.indices.data(), k0, k1, x, s.data());
     return s;
   }
-  accumulate_blocks<d, true>(A.values.data(), A.indices.data(), k0, kd, x, s.data());
-  accumulate_blocks<d, true>(A.values.data(), A.indices.data(), kd + 1, k1, x, s.data());
+  accumulate_blocks<d, true>(vals, A.indices.data(), k0, kd, x, s.data());
+  accumulate_blocks<d, true>(vals, A.indices.data(), kd + 1, k1, x, s.data());
   return s;
+}
+
+template <int d>
+inline Vec<d> local_rhs(const BlockMatrix<d>& A, const double* x, const double* b, Index i) {
+  return A.with_values([&](const auto* vals) { return local_rhs<d>(A, vals, x, b, i); });
 }
 
 // x_i <- x_i + omega (y - x_i), y the exact block solve (omega = 1: y; CycleOptions::omega says why)
@@ -124,21 +130,21 @@ inline void projected_row(const BlockMatrix<d>& A, const std::uint8_t* inert, co
   }
 }
 
-template <int d>
-__attribute__((noinline)) void projected_row_out_of_line(const BlockMatrix<d>& A, const std::uint8_t* inert, const double* lo,
-                                                         const double* hi, const double* b, double* x, Index i) {
-  projected_row<d>(A, inert, lo, hi, local_rhs<d>(A, x, b, i), x, i);
+template <int d, class V>
+__attribute__((noinline)) void projected_row_out_of_line(const BlockMatrix<d>& A, const V* vals, const std::uint8_t* inert,
+                                                         const double* lo, const double* hi, const double* b, double* x, Index i) {
+  projected_row<d>(A, inert, lo, hi, local_rhs<d>(A, vals, x, b, i), x, i);
 }
 
 // The rows [r0, r1) of one colour of a level stored by colours (the coarse sweeps' kernel, as the
 // fine sweep's sweep_range): the matrix arrays in registers, x prefetched at the columns of the row
 // kPrefetchRows ahead (other colours' ranges), the stored inverse applied on scalars; bounded rows
 // (bounded != nullptr: a projected sweep; only near the contact zone) go out of line. The same
-// sums and products in the same order as the per-row path: the same bits.
-template <int d>
-void gs_range(const BlockMatrix<d>& A, const double* Dinv, const std::uint8_t* bounded, const std::uint8_t* inert, const double* lo,
-              const double* hi, const double* b, double* x, double omega, Index r0, Index r1) {
-  const double* values = A.values.data();
+// sums and products in the same order as the per-row path: the same bits. V: the stored value
+// type of the values read (A.with_values: float on a coarse level under float_coarse_values).
+template <int d, class V>
+void gs_range(const BlockMatrix<d>& A, const V* values, const double* Dinv, const std::uint8_t* bounded, const std::uint8_t* inert,
+              const double* lo, const double* hi, const double* b, double* x, double omega, Index r0, Index r1) {
   const ColIndex* cols = A.indices.data();
   const Index* ptr = A.indptr.data();
   const Index* diag = A.diag.data();
@@ -148,7 +154,7 @@ void gs_range(const BlockMatrix<d>& A, const double* Dinv, const std::uint8_t* b
     if (i + kPrefetchRows < n) prefetch_block_columns<d>(cols, ptr[i + kPrefetchRows], ptr[i + kPrefetchRows + 1], x);
     prefetch_row_values<d>(values, ptr, i, ahead, n);
     if (bounded && bounded[i]) {
-      projected_row_out_of_line<d>(A, inert, lo, hi, b, x, i);
+      projected_row_out_of_line<d>(A, values, inert, lo, hi, b, x, i);
       continue;
     }
     double s[d];
@@ -161,6 +167,12 @@ void gs_range(const BlockMatrix<d>& A, const double* Dinv, const std::uint8_t* b
     }
     relaxed_block_solve<d>(CMatMap<d>(Dinv + i * d * d), s, x + d * i, omega);
   }
+}
+
+template <int d>
+void gs_range(const BlockMatrix<d>& A, const double* Dinv, const std::uint8_t* bounded, const std::uint8_t* inert, const double* lo,
+              const double* hi, const double* b, double* x, double omega, Index r0, Index r1) {
+  A.with_values([&](const auto* vals) { gs_range<d>(A, vals, Dinv, bounded, inert, lo, hi, b, x, omega, r0, r1); });
 }
 
 template <int d>
