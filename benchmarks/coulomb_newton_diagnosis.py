@@ -92,8 +92,9 @@ def ac_residual(S, F, x):
     return phi
 
 
-def newton_target(S, F, x):
-    """The full Newton step's target y (the linear problem of x's state) and the state counts."""
+def coulomb_state(S, F, x):
+    """The Alart-Curnier state of x (c_p the node's own diagonal entries): the normal and tangential
+    arguments lam, z and the masks active, stick, slip over the contact nodes."""
     K, b, n, t, g = S["K"], S["b"], S["n"], S["t"], S["g"]
     r = b - K @ x
     diag = K.diagonal()
@@ -101,7 +102,13 @@ def newton_target(S, F, x):
     z = r[t] + diag[t] * x[t]
     active = lam > 0
     stick = active & (np.abs(z) <= F * lam)
-    slip = active & ~stick
+    return lam, z, active, stick, active & ~stick
+
+
+def newton_target(S, F, x):
+    """The full Newton step's target y (the linear problem of x's state) and the state counts."""
+    K, b, n, t, g = S["K"], S["b"], S["n"], S["t"], S["g"]
+    lam, z, active, stick, slip = coulomb_state(S, F, x)
     N = K.shape[0]
     ident = np.zeros(N, bool)
     ident[S["fixed"]] = True

@@ -169,19 +169,13 @@ class TwoGrid:
     """The settled cycle's error map on the free dofs of level L's state (see the module doc)."""
 
     def __init__(self, H, L, F, u, omega=1.3, nu=3):
-        from coulomb_newton_diagnosis import hertz_system
+        from coulomb_newton_diagnosis import coulomb_state, hertz_system
         Hl = H.truncated(L)
         p = hertz_problem_on(Hl, F)
         S = hertz_system(p)
-        K, b, n, t, g = S["K"], S["b"], S["n"], S["t"], S["g"]
+        K, n, t = S["K"], S["n"], S["t"]
         x = S["D"] * np.asarray(u).ravel()
-        r = b - K @ x
-        diag = K.diagonal()
-        lam = r[n] + diag[n] * (x[n] - g)
-        z = r[t] + diag[t] * x[t]
-        active = lam > 0
-        stick = active & (np.abs(z) <= F * lam)
-        slip = active & ~stick
+        lam, z, active, stick, slip = coulomb_state(S, F, x)
         self.counts = (int(active.sum()), int(stick.sum()), int(slip.sum()))
         N = K.shape[0]
         trunc = S["fixed"].copy()
@@ -303,47 +297,52 @@ class TwoGrid:
         return float(abs(ev[0])), [complex(v) for v in ev]
 
 
+def settled_models(a, H):
+    """(L, F, the two-grid model of the stored solution, the time before it was built) for every
+    level and friction of the arguments whose solution has been stored (sol_path)."""
+    for L in a.levels:
+        for F in a.frictions:
+            if os.path.exists(sol_path(L, F)):
+                t0 = time.perf_counter()
+                yield L, F, TwoGrid(H, L, F, np.load(sol_path(L, F))), t0
+
+
 def modes(a):
     """Where the slowest mode of each two-grid map lives: |eigenvalue|, the energy share of its 20
     most energetic dofs and their nodes' coordinates (the sliding nodes' x for comparison)."""
     H = adaptive_hierarchy(11)
     rows = []
-    for L in a.levels:
-        for F in a.frictions:
-            if not os.path.exists(sol_path(L, F)):
-                continue
-            t0 = time.perf_counter()
-            T = TwoGrid(H, L, F, np.load(sol_path(L, F)))
-            pts = hertz_problem_on(H.truncated(L), F).mesh.points
-            print(f"L{L} F={F:g}: {T.rank} sliding nodes at x = {np.round(np.sort(T.slip_x), 4).tolist()}", flush=True)
-            # the sliding chain alone: forward Gauss-Seidel on the J rows of the sliding tangentials,
-            # every other error component zero (dense, k x k), and the same with the K rows
-            sl = np.nonzero(T.Jf.diagonal() != T.Kf.diagonal())[0]
-            for name, A in (("J", T.Jf), ("K", T.Kf)):
-                Ass = A[sl][:, sl].toarray()
-                Mlow = np.tril(Ass)
-                G = np.eye(len(sl)) - np.linalg.solve(Mlow, Ass)
-                rho = float(max(abs(np.linalg.eigvals(G)))) if len(sl) else float("nan")
-                lam = np.linalg.eigvals(Ass) if len(sl) else np.array([np.nan])
-                print(f"  sliding chain alone ({len(sl)} tangentials), Gauss-Seidel on its {name} rows: radius {rho:.3f}, "
-                      f"eigenvalues of the block: min Re {lam.real.min():.3g}, max |Im| {abs(lam.imag).max():.3g}", flush=True)
-                rows.append({"level": L, "F": F, "map": f"chain GS {name}", "radius": rho})
-            for c in ("galerkin", "petrov", None) if L <= 9 else ("galerkin", "petrov"):
-                n = T.nfree
-                op = spla.LinearOperator((n, n), matvec=lambda v: T.apply(np.asarray(v).ravel(), coarse=c), dtype=float)
-                w, V = spla.eigs(op, k=2, which="LM", tol=1e-5, ncv=20, maxiter=3000)
-                i = int(np.argmax(abs(w)))
-                v = V[:, i]
-                en = np.abs(np.conj(v) * (T.Kf @ v))
-                en /= en.sum()
-                top = np.argsort(-en)[:20]
-                nodes = np.unique(T.fr[top] // 2)
-                xs, ys = np.round(np.unique(pts[nodes, 0]), 4).tolist(), np.round(np.unique(pts[nodes, 1]), 4).tolist()
-                name = {"galerkin": "frozen (a)", "petrov": "Petrov-Galerkin (b)", None: "smoother alone"}[c]
-                print(f"  {name}: |eig| {abs(w[i]):.3f} ({w[i].real:.3f}{w[i].imag:+.3f}i), top-20 dofs hold {en[top].sum():.2f} "
-                      f"of the energy, at x = {xs}, y = {ys} ({time.perf_counter() - t0:.0f} s)", flush=True)
-                rows.append({"level": L, "F": F, "map": name, "eig": [float(w[i].real), float(w[i].imag)],
-                             "top20_energy": float(en[top].sum()), "x": xs, "y": ys})
+    for L, F, T, t0 in settled_models(a, H):
+        pts = hertz_problem_on(H.truncated(L), F).mesh.points
+        print(f"L{L} F={F:g}: {T.rank} sliding nodes at x = {np.round(np.sort(T.slip_x), 4).tolist()}", flush=True)
+        # the sliding chain alone: forward Gauss-Seidel on the J rows of the sliding tangentials,
+        # every other error component zero (dense, k x k), and the same with the K rows
+        sl = np.nonzero(T.Jf.diagonal() != T.Kf.diagonal())[0]
+        for name, A in (("J", T.Jf), ("K", T.Kf)):
+            Ass = A[sl][:, sl].toarray()
+            Mlow = np.tril(Ass)
+            G = np.eye(len(sl)) - np.linalg.solve(Mlow, Ass)
+            rho = float(max(abs(np.linalg.eigvals(G)))) if len(sl) else float("nan")
+            lam = np.linalg.eigvals(Ass) if len(sl) else np.array([np.nan])
+            print(f"  sliding chain alone ({len(sl)} tangentials), Gauss-Seidel on its {name} rows: radius {rho:.3f}, "
+                  f"eigenvalues of the block: min Re {lam.real.min():.3g}, max |Im| {abs(lam.imag).max():.3g}", flush=True)
+            rows.append({"level": L, "F": F, "map": f"chain GS {name}", "radius": rho})
+        for c in ("galerkin", "petrov", None) if L <= 9 else ("galerkin", "petrov"):
+            n = T.nfree
+            op = spla.LinearOperator((n, n), matvec=lambda v: T.apply(np.asarray(v).ravel(), coarse=c), dtype=float)
+            w, V = spla.eigs(op, k=2, which="LM", tol=1e-5, ncv=20, maxiter=3000)
+            i = int(np.argmax(abs(w)))
+            v = V[:, i]
+            en = np.abs(np.conj(v) * (T.Kf @ v))
+            en /= en.sum()
+            top = np.argsort(-en)[:20]
+            nodes = np.unique(T.fr[top] // 2)
+            xs, ys = np.round(np.unique(pts[nodes, 0]), 4).tolist(), np.round(np.unique(pts[nodes, 1]), 4).tolist()
+            name = {"galerkin": "frozen (a)", "petrov": "Petrov-Galerkin (b)", None: "smoother alone"}[c]
+            print(f"  {name}: |eig| {abs(w[i]):.3f} ({w[i].real:.3f}{w[i].imag:+.3f}i), top-20 dofs hold {en[top].sum():.2f} "
+                  f"of the energy, at x = {xs}, y = {ys} ({time.perf_counter() - t0:.0f} s)", flush=True)
+            rows.append({"level": L, "F": F, "map": name, "eig": [float(w[i].real), float(w[i].imag)],
+                         "top20_energy": float(en[top].sum()), "x": xs, "y": ys})
     return {"mode": "modes", "runs": rows}
 
 
@@ -354,17 +353,13 @@ def chain(a):
     print("two-grid model + an exact sliding-chain solve after every sweep: spectral radii")
     print("| L | F | sliding | frozen (a) | frozen + chain | PG (b) + chain |")
     print("|---|---|---|---|---|---|")
-    for L in a.levels:
-        for F in a.frictions:
-            if not os.path.exists(sol_path(L, F)):
-                continue
-            T = TwoGrid(H, L, F, np.load(sol_path(L, F)))
-            r = {"level": L, "F": F, "sliding": T.rank}
-            r["frozen"], _ = T.radius(coarse="galerkin")
-            r["frozen_chain"], _ = T.radius(coarse="galerkin", chain=True)
-            r["petrov_chain"], _ = T.radius(coarse="petrov", chain=True)
-            rows.append(r)
-            print(f"| {L} | {F:g} | {T.rank} | {r['frozen']:.3f} | {r['frozen_chain']:.3f} | {r['petrov_chain']:.3f} |", flush=True)
+    for L, F, T, t0 in settled_models(a, H):
+        r = {"level": L, "F": F, "sliding": T.rank}
+        r["frozen"], _ = T.radius(coarse="galerkin")
+        r["frozen_chain"], _ = T.radius(coarse="galerkin", chain=True)
+        r["petrov_chain"], _ = T.radius(coarse="petrov", chain=True)
+        rows.append(r)
+        print(f"| {L} | {F:g} | {T.rank} | {r['frozen']:.3f} | {r['frozen_chain']:.3f} | {r['petrov_chain']:.3f} |", flush=True)
     return {"mode": "chain", "runs": rows}
 
 
@@ -375,17 +370,13 @@ def threegrid(a):
     print("three-grid model (L fine, L-1 smoothed, L-2 exact): spectral radii; level L-1 matrix / level L-2 from")
     print("| L | F | sliding | sym / sym (today's) | PG / sym (PG on L-1 only) | PG / PG |")
     print("|---|---|---|---|---|---|")
-    for L in a.levels:
-        for F in a.frictions:
-            if not os.path.exists(sol_path(L, F)):
-                continue
-            T = TwoGrid(H, L, F, np.load(sol_path(L, F)))
-            r = {"level": L, "F": F, "sliding": T.rank}
-            for key, (top, below) in (("sym_sym", ("galerkin", "galerkin")), ("pg_sym", ("petrov", "galerkin")),
-                                      ("pg_pg", ("petrov", "petrov"))):
-                r[key], _ = T.radius(coarse=T.three_grid(top, below))
-            rows.append(r)
-            print(f"| {L} | {F:g} | {T.rank} | {r['sym_sym']:.3f} | {r['pg_sym']:.3f} | {r['pg_pg']:.3f} |", flush=True)
+    for L, F, T, t0 in settled_models(a, H):
+        r = {"level": L, "F": F, "sliding": T.rank}
+        for key, (top, below) in (("sym_sym", ("galerkin", "galerkin")), ("pg_sym", ("petrov", "galerkin")),
+                                  ("pg_pg", ("petrov", "petrov"))):
+            r[key], _ = T.radius(coarse=T.three_grid(top, below))
+        rows.append(r)
+        print(f"| {L} | {F:g} | {T.rank} | {r['sym_sym']:.3f} | {r['pg_sym']:.3f} | {r['pg_pg']:.3f} |", flush=True)
     return {"mode": "threegrid", "runs": rows}
 
 
@@ -396,25 +387,20 @@ def twogrid(a):
     print("| L | F | state a/st/sl | free / coarse dofs | Tresca-like (no F r_n) | frozen (a) | Petrov-Galerkin (b) | "
           "smoother alone | top eigenvalues (a) | PG term: coarse rows / nnz (of A_c nnz) |")
     print("|---|---|---|---|---|---|---|---|---|---|")
-    for L in a.levels:
-        for F in a.frictions:
-            if not os.path.exists(sol_path(L, F)):
-                continue
-            t0 = time.perf_counter()
-            T = TwoGrid(H, L, F, np.load(sol_path(L, F)))
-            res = {"level": L, "F": F, "state": T.counts, "free": T.nfree, "coarse": T.ncoarse}
-            res["tresca"], _ = T.radius(op="K")
-            res["frozen"], ev_a = T.radius(coarse="galerkin")
-            res["petrov"], ev_b = T.radius(coarse="petrov")
-            res["smoother"], _ = T.radius(coarse=None) if L <= 7 else (float("nan"), None)
-            res.update(eig_frozen=[[v.real, v.imag] for v in ev_a], eig_petrov=[[v.real, v.imag] for v in ev_b],
-                       pg_rows=T.pg_rows, pg_nnz=T.pg_nnz, Ac_nnz=T.Ac_nnz, rank=T.rank,
-                       slip_x=[float(v) for v in T.slip_x], seconds=time.perf_counter() - t0)
-            rows.append(res)
-            print(f"| {L} | {F:g} | {T.counts[0]}/{T.counts[1]}/{T.counts[2]} | {T.nfree} / {T.ncoarse} | {res['tresca']:.3f} | "
-                  f"{res['frozen']:.3f} | {res['petrov']:.3f} | {res['smoother']:.3f} | "
-                  + ", ".join(f"{v.real:.3f}{v.imag:+.3f}i" for v in ev_a[:3])
-                  + f" | {T.pg_rows} / {T.pg_nnz} ({T.Ac_nnz}) |", flush=True)
+    for L, F, T, t0 in settled_models(a, H):
+        res = {"level": L, "F": F, "state": T.counts, "free": T.nfree, "coarse": T.ncoarse}
+        res["tresca"], _ = T.radius(op="K")
+        res["frozen"], ev_a = T.radius(coarse="galerkin")
+        res["petrov"], ev_b = T.radius(coarse="petrov")
+        res["smoother"], _ = T.radius(coarse=None) if L <= 7 else (float("nan"), None)
+        res.update(eig_frozen=[[v.real, v.imag] for v in ev_a], eig_petrov=[[v.real, v.imag] for v in ev_b],
+                   pg_rows=T.pg_rows, pg_nnz=T.pg_nnz, Ac_nnz=T.Ac_nnz, rank=T.rank,
+                   slip_x=[float(v) for v in T.slip_x], seconds=time.perf_counter() - t0)
+        rows.append(res)
+        print(f"| {L} | {F:g} | {T.counts[0]}/{T.counts[1]}/{T.counts[2]} | {T.nfree} / {T.ncoarse} | {res['tresca']:.3f} | "
+              f"{res['frozen']:.3f} | {res['petrov']:.3f} | {res['smoother']:.3f} | "
+              + ", ".join(f"{v.real:.3f}{v.imag:+.3f}i" for v in ev_a[:3])
+              + f" | {T.pg_rows} / {T.pg_nnz} ({T.Ac_nnz}) |", flush=True)
     return {"mode": "twogrid", "runs": rows}
 
 
