@@ -10,6 +10,7 @@
 #include "steps/nonlinear_gauss_seidel.hpp"
 #include "steps/tied_correction.hpp"
 #include "steps/settled_anderson.hpp"
+#include "steps/settled_petrov_galerkin.hpp"
 
 namespace cmg {
 
@@ -68,7 +69,7 @@ class MonotoneMultigridStep {
                         FineIterate<d>& it, const CycleOptions& opt, const SweepOrder& fine_order = SweepOrder(),
                         TiedCorrection<d>* tied = nullptr, CycleWorkspace* work = nullptr)
       : P_(P), H_(H), C_(C), built_(built), it_(it), opt_(opt), order_(fine_order), tied_(tied), ws_(work ? *work : own_),
-        r_(ws_.r), old_(ws_.old), anderson_(ws_.anderson) {
+        r_(ws_.r), old_(ws_.old), anderson_(ws_.anderson), pg_(H, opt.settled_petrov_galerkin && L::coarse_freezes_bound) {
     const Index n = P.num_nodes() * d;
     mask_ = P.base_mask();
     r_.assign(n, 0.0); old_.assign(n, 0.0);  // of the same size: no new pages
@@ -90,6 +91,10 @@ class MonotoneMultigridStep {
     pc.lap(Phase::Linearize);
     const bool state_changed = mask_ != built_.mask;
     rebuilt = built_.update(H_, A, mask_, hessian_);
+    // settled: the truncation of this solve's cycle before (the first cycle's built one may be a
+    // previous solve's)
+    pg_.bring(A, mask_.data(), coupling_, !state_changed && !first_);
+    first_ = false;
     pc.lap(Phase::CoarseUpdate);
     // u += P~ c: prolongated straight into the iterate (no fine vector for the correction)
     C_.correction(opt_, r_.data(), mask_.data(), NodeBounds{&P_.contact_nodes(), lo_.data(), hi_.data()}, bounded, u.data(),
@@ -111,8 +116,10 @@ class MonotoneMultigridStep {
       // zero pressure and gap) switched between free and sliding in every cycle; the cycle map
       // there contracts by only 0.96 even with the state fixed. The mixed iterate still takes the
       // plain result's exact state (admit_mixed), and a mixed step that does not help restarts.
-      if (!any_sliding()) anderson_.reset();
-      else {
+      if (!any_sliding()) {
+        anderson_.reset();
+        pg_.judge(std::numeric_limits<double>::quiet_NaN());
+      } else {
         // The restart test's A (G(x) - x) goes into r_ (free after the coarse correction): where the
         // mixed iterate is refused, u is G(x) bit for bit, and the update of A u below adds r_ and
         // takes the test's |u - u_old|_A^2 (the same sums over the same chunks) instead of a
@@ -122,6 +129,8 @@ class MonotoneMultigridStep {
         const bool restart = state_changed && std::sqrt(std::max(e_change, 0.0)) < best_step_;
         const bool mixed =
             anderson_.step(old_, u, [&](std::vector<double>& y, const std::vector<double>& plain) { return admit_mixed(y, plain); }, restart);
+        // the coupling's fallback; once off, the cycle map changes: the history starts again
+        if (pg_.judge(anderson_.last_plain_residual())) anderson_.reset();
         if (state_changed && !mixed) {
           parallel_for((Index)u.size(), [&](Index k) { it_.Au[k] += r_[k]; });
           pc.lap(Phase::Norm);
@@ -160,6 +169,7 @@ class MonotoneMultigridStep {
         if (s != NodeState::Free) { ++rec.active; (s == NodeState::Stick ? rec.stick : rec.slip)++; }
       }
     rec.energy = e;
+    rec.petrov_galerkin = pg_.state();
   }
 
   // ||u - u*||_A with u* canonical (taken to the contact frames first)
@@ -194,6 +204,7 @@ class MonotoneMultigridStep {
   // The law's linearization at every contact node; returns whether any bound is finite.
   bool linearize() {
     hessian_.clear();
+    coupling_.clear();
     if constexpr (!L::has_contact) return false;
     bool bounded = false;
     const auto& base = P_.base_mask();
@@ -204,6 +215,11 @@ class MonotoneMultigridStep {
                                hi_.data() + c * d, &Hc, P_.matrix().block(P_.matrix().diag[i])))
         bounded = true;
       if (!Hc.isZero(0.0)) hessian_.emplace_back(i, Hc);
+      if constexpr (L::coarse_freezes_bound)
+        if (pg_.wanted()) {
+          const Vec<d> w = bound_coupling<L, d>(P_.node(c), it_.u.data() + k, r_[k]);
+          if (!w.isZero(0.0)) coupling_.emplace_back(i, w);
+        }
     }
     return bounded;
   }
@@ -271,6 +287,9 @@ class MonotoneMultigridStep {
   std::vector<double> lo_, hi_;  // nc * d
   std::vector<std::pair<Index, Mat<d>>> hessian_;
   SettledAnderson& anderson_;
+  SettledPetrovGalerkin<d> pg_;  // declared after H_: clears its overlay of H_ first
+  std::vector<std::pair<Index, Vec<d>>> coupling_;  // sliding node -> w (bound_coupling), when wanted
+  bool first_ = true;
   double best_step_ = kInf;  // the smallest |u^{k+1} - u^k|_A of this solve
 };
 
