@@ -116,10 +116,8 @@ class MonotoneMultigridStep {
       // zero pressure and gap) switched between free and sliding in every cycle; the cycle map
       // there contracts by only 0.96 even with the state fixed. The mixed iterate still takes the
       // plain result's exact state (admit_mixed), and a mixed step that does not help restarts.
-      if (!any_sliding()) {
-        anderson_.reset();
-        pg_.judge(std::numeric_limits<double>::quiet_NaN());
-      } else {
+      if (!any_sliding()) anderson_.reset();
+      else {
         // The restart test's A (G(x) - x) goes into r_ (free after the coarse correction): where the
         // mixed iterate is refused, u is G(x) bit for bit, and the update of A u below adds r_ and
         // takes the test's |u - u_old|_A^2 (the same sums over the same chunks) instead of a
@@ -129,8 +127,6 @@ class MonotoneMultigridStep {
         const bool restart = state_changed && std::sqrt(std::max(e_change, 0.0)) < best_step_;
         const bool mixed =
             anderson_.step(old_, u, [&](std::vector<double>& y, const std::vector<double>& plain) { return admit_mixed(y, plain); }, restart);
-        // the coupling's fallback; once off, the cycle map changes: the history starts again
-        if (pg_.judge(anderson_.last_plain_residual())) anderson_.reset();
         if (state_changed && !mixed) {
           parallel_for((Index)u.size(), [&](Index k) { it_.Au[k] += r_[k]; });
           pc.lap(Phase::Norm);
@@ -150,9 +146,18 @@ class MonotoneMultigridStep {
       VecMap<d>(it_.Au.data() + d * i) += y;
       return (CVecMap<d>(u.data() + d * i) - CVecMap<d>(old_.data() + d * i)).dot(y);
     });
+    const double step = std::sqrt(std::max(e, 0.0));
+    if (pg_.judge(step, best_step_)) {
+      // the coupling's step was no smaller than every step before: refused, the iterate back to
+      // x (feasible, as every iterate), A u with it; the cycle map changes: the history starts again
+      anderson_.reset();
+      parallel_for((Index)u.size(), [&](Index k) { u[k] = old_[k]; });
+      A.multiply(u.data(), it_.Au.data());
+    } else {
+      best_step_ = std::min(best_step_, step);
+    }
     pc.lap(Phase::Norm);
-    best_step_ = std::min(best_step_, std::sqrt(std::max(e, 0.0)));
-    return std::sqrt(std::max(e, 0.0));
+    return step;
   }
 
   // energy (with the Dirichlet offset and the friction term) and the contact counts

@@ -23,7 +23,6 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <deque>
-#include <limits>
 #include <vector>
 #include "parallel.hpp"
 
@@ -44,8 +43,6 @@ class SettledAnderson {
     return s;
   }
   bool last_accelerated() const { return accelerated_; }
-  // |G(x) - x|^2 of the last step's plain cycle (NaN after a restart, which forms none)
-  double last_plain_residual() const { return plain_; }
 
   // x: the iterate before the cycle; gx: the cycle's result G(x), overwritten with the mixed
   // iterate when `admit(candidate, plain)` accepts it (it may adjust the candidate; plain is G(x)).
@@ -65,7 +62,6 @@ class SettledAnderson {
   bool step(const std::vector<double>& x, std::vector<double>& gx, Admit&& admit, bool restart = false) {
     if (restart) {  // this cycle's pair spans two states: the history starts with the next one
       reset();
-      plain_ = std::numeric_limits<double>::quiet_NaN();
       return false;
     }
     const Index n = (Index)x.size();
@@ -103,7 +99,7 @@ class SettledAnderson {
       gnorm = 0;
       keep_last(x, gx, &gnorm);
     }
-    last_gnorm_ = plain_ = gnorm;
+    last_gnorm_ = gnorm;
     accelerated_ = false;
     if (last_ >= 0) return false;  // no history, or it was just restarted: x, G(x) kept
     if (gnorm == 0) { keep_last(x, gx, nullptr); return false; }
@@ -187,7 +183,6 @@ class SettledAnderson {
   double gram_[kDepth][kDepth] = {};  // dg_a . dg_b by slots
   double rhs_[kDepth] = {};
   double last_gnorm_ = 0;
-  double plain_ = std::numeric_limits<double>::quiet_NaN();
   bool accelerated_ = false;
 };
 

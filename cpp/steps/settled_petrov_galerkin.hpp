@@ -12,13 +12,12 @@
 //
 // What it gives up: the coarse correction is no longer the minimization of the frozen energy, so it
 // need not lower the energy (the bounds of the correction, hence feasibility, are kept as they are).
-// Hence the fallback: a cycle with the term whose plain fixed-point residual |G(x) - x| is no smaller
-// than the cycle's before switches the term off for the rest of the solve (the same test the settled
-// Anderson mixing restarts on; the model has unstable cases, L7 F = 8 and L11 F = 8). From there on
+// Hence the fallback: a cycle with the term whose correction |u^{k+1} - u^k|_A is no smaller than
+// every correction of the solve before (the measure of the settled Anderson mixing's restart test)
+// is refused -- the iterate goes back to the cycle's start, the cycle still counts -- and the term
+// is off for the rest of the solve; the model has unstable cases (L7 F = 8, L11 F = 8). From there on
 // the cycles are today's monotone ones from a feasible iterate.
 #pragma once
-#include <cmath>
-#include <limits>
 #include <tuple>
 #include "mg/hierarchy.hpp"
 
@@ -70,7 +69,7 @@ class SettledPetrovGalerkin {
   // truncation of the cycle before) and something slides, else the symmetric matrix. Returns
   // whether the coupling is on (not where set_top_overlay refuses it).
   bool bring(const BlockMatrix<d>& A, const std::uint8_t* mask, const std::vector<std::pair<Index, Vec<d>>>& coupling, bool settled) {
-    used_ = false;
+    used_ = refused_ = false;
     if (!wanted() || !settled || coupling.empty() || H_.num_coarse_levels() < 2) {
       H_.clear_top_overlay();
       return false;
@@ -84,29 +83,24 @@ class SettledPetrovGalerkin {
     return true;
   }
 
-  // After the cycle: its plain fixed-point residual |G(x) - x|^2 (NaN where none was formed).
-  // Returns whether the coupling was switched off now (the caller restarts what mixed its cycles).
-  bool judge(double plain) {
-    state_ = used_ ? 1 : 0;
-    const bool grew = used_ && std::isfinite(prev_) && std::isfinite(plain) && !(plain < prev_);
-    prev_ = plain;
-    if (!grew) return false;
-    fallen_back_ = true;
-    state_ = 2;
+  // After the cycle: its correction |u^{k+1} - u^k|_A and the smallest of the solve before. Returns
+  // whether the cycle carried the coupling and its step was no smaller: then the coupling is off for
+  // the rest of the solve and the caller refuses the step (the iterate goes back to x).
+  bool judge(double step, double best) {
+    if (!used_ || step < best) return false;
+    fallen_back_ = refused_ = true;
     H_.clear_top_overlay();
     applied_.clear();
     return true;
   }
 
-  // the last cycle: 0 symmetric coarse problem, 1 with the coupling, 2 with it and then switched off
-  int state() const { return state_; }
+  // the last cycle: 0 symmetric coarse problem, 1 with the coupling, 2 with it, refused and switched off
+  int state() const { return used_ ? (refused_ ? 2 : 1) : 0; }
 
  private:
   GalerkinHierarchy<d>& H_;
   bool on_;
-  bool fallen_back_ = false, used_ = false;
-  int state_ = 0;
-  double prev_ = std::numeric_limits<double>::quiet_NaN();
+  bool fallen_back_ = false, used_ = false, refused_ = false;
   std::vector<std::pair<Index, Vec<d>>> applied_;
 };
 
