@@ -70,6 +70,20 @@ def top_matrix(A):
     return sp.bsr_matrix((np.asarray(A.data), np.asarray(A.indices), np.asarray(A.indptr)), shape=A.shape).tocsr()
 
 
+@pytest.mark.parametrize("ordering", ["coloured", "lexicographic"])
+def test_orderings_and_threads_agree(ordering):
+    # the overlay is put into the top level as stored (by colours when coloured): the same solution,
+    # and the same bits on 1 and 2 threads
+    p = hertz_problem("triangle", 5, 2.0, coulomb_at_zero=True)
+    off = p.solve(threads=1, ordering=ordering)
+    one = p.solve(threads=1, ordering=ordering, petrov_galerkin=True)
+    two = hertz_problem("triangle", 5, 2.0, coulomb_at_zero=True).solve(threads=2, ordering=ordering, petrov_galerkin=True)
+    same_solution(p, off, one)
+    assert one.extra["petrov_galerkin"]["cycles"] > 0
+    fresh = hertz_problem("triangle", 5, 2.0, coulomb_at_zero=True).solve(threads=1, ordering=ordering, petrov_galerkin=True)
+    assert np.array_equal(np.asarray(fresh.displacement), np.asarray(two.displacement))
+
+
 def test_problem_default_and_linear_reference():
     p = hertz_problem("triangle", 5, 2.0, coulomb_at_zero=True)
     p.settled_petrov_galerkin = True
