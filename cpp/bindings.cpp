@@ -129,17 +129,20 @@ py::dict result_to_dict(SolveResult& R, const ContactSolver<d>& S) {
   py::array_t<double> cn(h), en(h), sec(h), err(h), step(h), fdec(h);
   py::array_t<Index> act(h), st(h), sl(h);
   py::array_t<bool> rb(h);
+  py::array_t<std::int8_t> pg(h);
   for (py::ssize_t k = 0; k < h; ++k) {
     const auto& r = R.history[k];
     cyc.mutable_at(k) = r.cycle; outer.mutable_at(k) = r.outer; cn.mutable_at(k) = r.correction_norm;
     en.mutable_at(k) = r.energy; sec.mutable_at(k) = r.seconds; err.mutable_at(k) = r.error; act.mutable_at(k) = r.active;
     st.mutable_at(k) = r.stick; sl.mutable_at(k) = r.slip; rb.mutable_at(k) = r.rebuilt;
     step.mutable_at(k) = r.step_size; fdec.mutable_at(k) = r.frozen_decrease; linits.mutable_at(k) = r.linear_iterations;
+    pg.mutable_at(k) = (std::int8_t)r.petrov_galerkin;
   }
   py::dict hist;
   hist["cycle"] = cyc; hist["outer"] = outer; hist["correction_norm"] = cn; hist["energy"] = en;
   hist["seconds"] = sec; hist["error"] = err; hist["active"] = act; hist["stick"] = st; hist["slip"] = sl; hist["rebuilt"] = rb;
   hist["step_size"] = step; hist["frozen_decrease"] = fdec; hist["linear_iterations"] = linits;
+  hist["petrov_galerkin"] = pg;
   out["history"] = hist;
   out["outer_changes"] = to_numpy(R.outer_changes, {(py::ssize_t)R.outer_changes.size()});
   out["converged"] = R.converged;
@@ -281,7 +284,7 @@ void bind_dim(py::module_& m) {
       .def("solve", [](CS& S, py::object u0, double tol, double rtol, int max_cycles, bool fixed_point, double fp_tol,
                        int fp_max, py::object reference, py::object cycle, py::object nu1, py::object nu2, py::object progress,
                        bool tnnmg, py::object ordering, int threads, int fp_stall, py::object linear, py::object lines,
-                       py::object omega, py::object omega_post) {
+                       py::object omega, py::object omega_post, py::object petrov_galerkin) {
              SolveOptions o;
              if (fp_stall < 0) throw InputError("fixed_point_stall_window must be >= 0 (0: off)");
              o.fixed_point_stall_window = fp_stall;
@@ -299,6 +302,12 @@ void bind_dim(py::module_& m) {
              if (!omega_post.is_none()) {
                co.omega_post = omega_post.cast<double>();
                check_omega(co.omega_post);
+             }
+             if (!petrov_galerkin.is_none()) {
+               if (!py::isinstance<py::bool_>(petrov_galerkin)) throw InputError("petrov_galerkin must be True or False");
+               co.settled_petrov_galerkin = petrov_galerkin.cast<bool>();
+               if (co.settled_petrov_galerkin && (tnnmg || fixed_point))
+                 throw InputError("petrov_galerkin is a choice of the monotone multigrid cycle (not tnnmg or fixed_point)");
              }
              check_smoothing_steps(co.nu1, co.nu2);
              check_omega(co.omega);
@@ -343,6 +352,7 @@ void bind_dim(py::module_& m) {
              out["ordering"] = ordering_name(co.ordering);
              out["omega"] = co.omega;
              if (co.omega_post > 0) out["omega_post"] = co.omega_post;
+             if (co.settled_petrov_galerkin) out["petrov_galerkin"] = true;
              if (tnnmg) { out["linear_correction"] = linear_correction_name(co.linear); out["lines"] = co.lines; }
              out["threads"] = threads == 0 ? max_threads() : (have_openmp() ? threads : 1);
              return out;
@@ -353,7 +363,9 @@ void bind_dim(py::module_& m) {
            py::arg("nu2") = py::none(), py::arg("progress") = py::none(), py::arg("tnnmg") = false,
            py::arg("ordering") = py::none(), py::arg("threads") = 0, py::arg("fixed_point_stall_window") = 0,
            py::arg("linear") = py::none(), py::arg("lines") = py::none(), py::arg("omega") = py::none(),
-           py::arg("omega_post") = py::none(),
+           py::arg("omega_post") = py::none(), py::arg("petrov_galerkin") = py::none(),
+           "petrov_galerkin: in the settled cycles of a Coulomb solve, the top coarse level also carries the sliding "
+           "nodes' Petrov-Galerkin coupling, with a fallback to the symmetric one (default False; issue 11, seventh part); "
            "omega: over-relaxation of the unbounded block solves of every sweep (default 1, in (0, 2)); "
            "omega_post: the same for the post-smoothing sweeps only (tnnmg: on its coarse levels; default: omega); "
            "linear (tnnmg): its linear correction, 'pcg' (default), 'cycle' or 'coarse'; lines (tnnmg): line "

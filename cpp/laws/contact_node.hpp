@@ -139,4 +139,22 @@ bool linearize_node(const ContactNode& p, const double* u, double* r, std::uint8
   return bounded;
 }
 
+// What the coarse problem's frozen bound leaves out at a sliding node (issue 11, seventh part): the
+// friction force s t (t = v_T / |v_T|) moves with the normal residual r_n by s'(r_n) t, so the
+// Jacobian's tangential rows are K_T - s' t K_n, i.e. J = K + w e_n^T K with w = -s' t (zero normal
+// component). Returns w, zero where the node does not slide or its bound does not move with r_n.
+template <class L, int d>
+Vec<d> bound_coupling(const ContactNode& p, const double* u, double r_n) {
+  Vec<d> w = Vec<d>::Zero();
+  const bool active = u[0] >= p.gap;
+  const double slope = L::bound_slope(p, active, r_n);
+  if (!(slope > 0) || !(L::bound(p, active, r_n) > 0)) return w;
+  const Vec<d> v = slip_increment<d>(p, u);
+  const double ut = free_tangential_norm<d>(v.data(), p.free);
+  if (ut == 0) return w;
+  for (int a = 1; a < d; ++a)
+    if (p.free >> (a - 1) & 1u) w[a] = -slope * v[a] / ut;
+  return w;
+}
+
 }  // namespace cmg

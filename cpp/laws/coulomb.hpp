@@ -18,6 +18,8 @@ struct Coulomb {
     });
   }
   static double bound(const ContactNode& p, bool active, double r_n) { return active ? p.coef * std::max(0.0, r_n) : 0.0; }
+  // d bound / d r_n: what the frozen bound leaves out of the coarse problem (bound_coupling)
+  static double bound_slope(const ContactNode& p, bool active, double r_n) { return active && r_n > 0 ? p.coef : 0.0; }
 };
 
 }  // namespace cmg::law

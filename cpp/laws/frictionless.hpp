@@ -14,6 +14,7 @@ struct Frictionless {
     return solve_node_tresca<d>(B, b, p.gap, 0.0, p.free);
   }
   static double bound(const ContactNode&, bool, double) { return 0.0; }
+  static double bound_slope(const ContactNode&, bool, double) { return 0.0; }
 };
 
 }  // namespace cmg::law

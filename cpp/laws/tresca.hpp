@@ -17,6 +17,7 @@ struct Tresca {
     });
   }
   static double bound(const ContactNode& p, bool, double) { return p.bound; }
+  static double bound_slope(const ContactNode&, bool, double) { return 0.0; }  // a given bound
 };
 
 }  // namespace cmg::law

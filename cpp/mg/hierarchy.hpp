@@ -4,7 +4,9 @@
 // by incremental updates, and the factorized coarsest matrix.
 #pragma once
 #include <chrono>
+#include <tuple>
 #include <unordered_map>
+#include <Eigen/LU>
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 #include "mg/coarsest_solver.hpp"
@@ -81,9 +83,74 @@ class GalerkinHierarchy {
     return s + coarsest_.memory_bytes();
   }
 
+  // A term added to the top coarse level's matrix alone and not restricted to the levels below (the
+  // Petrov-Galerkin coupling of steps/settled_petrov_galerkin.hpp): blocks (I, J, M) of that level.
+  // The rows it touches get the inverse of their new, non-symmetric diagonal block; their sweeps
+  // read rows only, so nothing else changes. Refused (false, nothing changed) where a block lies
+  // outside the Galerkin pattern, a touched diagonal block is singular or a touched diagonal entry
+  // is not positive (the projected sweep's component solve divides by it). Replaces an overlay in
+  // place; undone bit for bit by clear_top_overlay(), which update() and rebuild() call first (an
+  // incremental update applies differences to the values and inverts the diagonals it touches as
+  // symmetric blocks).
+  bool set_top_overlay(const std::vector<std::tuple<Index, Index, Mat<d>>>& blocks) {
+    clear_top_overlay();
+    if (lv_.size() < 2) return false;  // the top level is the coarsest: solved by a symmetric factorization
+    Level& L = lv_.back();
+    std::unordered_map<Index, Mat<d>> add;
+    for (const auto& [I, J, M] : blocks) {
+      const Index pos = L.A.find(I, J);
+      if (pos < 0) return false;
+      auto [it, fresh] = add.try_emplace(pos, M);
+      if (!fresh) it->second += M;
+    }
+    std::vector<Index> rows;
+    for (const auto& [I, J, M] : blocks) rows.push_back(I);
+    std::sort(rows.begin(), rows.end());
+    rows.erase(std::unique(rows.begin(), rows.end()), rows.end());
+    std::vector<Mat<d>> inv(rows.size());
+    for (std::size_t r = 0; r < rows.size(); ++r) {
+      const Index i = rows[r], k = L.A.diag[i];
+      Mat<d> D = L.A.block(k);
+      if (auto it = add.find(k); it != add.end()) D += it->second;
+      for (int c = 0; c < d; ++c) {
+        if (L.inert[i * d + c]) { D.row(c).setZero(); D.col(c).setZero(); D(c, c) = 1; }
+        if (!(D(c, c) > 0)) return false;
+      }
+      const Eigen::FullPivLU<Mat<d>> lu(D);
+      if (lu.rank() < d) return false;
+      inv[r] = lu.inverse();
+    }
+    for (auto& [pos, M] : add) {
+      overlay_.blocks.emplace_back(pos, Mat<d>(L.A.block(pos)));
+      L.A.block(pos) += M;
+      if (!L.A.values32.empty()) L.A.round_values32(pos, pos + 1);
+    }
+    for (std::size_t r = 0; r < rows.size(); ++r) {
+      MatMap<d> Di(L.Dinv.data() + rows[r] * d * d);
+      overlay_.dinv.emplace_back(rows[r], Mat<d>(Di));
+      Di = inv[r];
+    }
+    factor_lines((int)lv_.size() - 1);
+    overlay_.on = true;
+    return true;
+  }
+  void clear_top_overlay() {
+    if (!overlay_.on) return;
+    Level& L = lv_.back();
+    for (const auto& [pos, M] : overlay_.blocks) {
+      L.A.block(pos) = M;
+      if (!L.A.values32.empty()) L.A.round_values32(pos, pos + 1);
+    }
+    for (const auto& [i, M] : overlay_.dinv) MatMap<d>(L.Dinv.data() + i * d * d) = M;
+    overlay_ = Overlay();
+    factor_lines((int)lv_.size() - 1);
+  }
+  bool has_top_overlay() const { return overlay_.on; }
+
   // Galerkin products for the fine mask, then the fine Hessian blocks (node -> block) on top.
   void rebuild(const BlockMatrix<d>& A_fine, const std::uint8_t* mask,
                const std::vector<std::pair<Index, Mat<d>>>& hessian = {}) {
+    clear_top_overlay();
     const int nc = (int)lv_.size();
     if (nc == 0) return;
     const auto t0 = std::chrono::steady_clock::now();
@@ -117,6 +184,7 @@ class GalerkinHierarchy {
   void update(const BlockMatrix<d>& A, const std::uint8_t* old_mask, const std::uint8_t* new_mask,
               const std::vector<std::pair<Index, Mat<d>>>& old_hessian = {},
               const std::vector<std::pair<Index, Mat<d>>>& new_hessian = {}) {
+    clear_top_overlay();
     const int nc = (int)lv_.size();
     if (nc == 0) return;
     if (incremental_ >= kFullRebuildEvery) { rebuild(A, new_mask, new_hessian); return; }
@@ -160,6 +228,12 @@ class GalerkinHierarchy {
     Mat<d> M;
   };
   static constexpr int kFullRebuildEvery = 64;
+  // the top level's values and inverted diagonal blocks before set_top_overlay
+  struct Overlay {
+    bool on = false;
+    std::vector<std::pair<Index, Mat<d>>> blocks, dinv;  // (position, block) and (row, inverse)
+  };
+  Overlay overlay_;
 
   void add_delta(int l, Index I, Index J, const Mat<d>& M) {
     const Index pos = lv_[l].A.find(I, J);

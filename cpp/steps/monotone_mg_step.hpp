@@ -10,6 +10,7 @@
 #include "steps/nonlinear_gauss_seidel.hpp"
 #include "steps/tied_correction.hpp"
 #include "steps/settled_anderson.hpp"
+#include "steps/settled_petrov_galerkin.hpp"
 
 namespace cmg {
 
@@ -68,7 +69,7 @@ class MonotoneMultigridStep {
                         FineIterate<d>& it, const CycleOptions& opt, const SweepOrder& fine_order = SweepOrder(),
                         TiedCorrection<d>* tied = nullptr, CycleWorkspace* work = nullptr)
       : P_(P), H_(H), C_(C), built_(built), it_(it), opt_(opt), order_(fine_order), tied_(tied), ws_(work ? *work : own_),
-        r_(ws_.r), old_(ws_.old), anderson_(ws_.anderson) {
+        r_(ws_.r), old_(ws_.old), anderson_(ws_.anderson), pg_(H, opt.settled_petrov_galerkin && L::coarse_freezes_bound) {
     const Index n = P.num_nodes() * d;
     mask_ = P.base_mask();
     r_.assign(n, 0.0); old_.assign(n, 0.0);  // of the same size: no new pages
@@ -90,6 +91,10 @@ class MonotoneMultigridStep {
     pc.lap(Phase::Linearize);
     const bool state_changed = mask_ != built_.mask;
     rebuilt = built_.update(H_, A, mask_, hessian_);
+    // settled: the truncation of this solve's cycle before (the first cycle's built one may be a
+    // previous solve's)
+    pg_.bring(A, mask_.data(), coupling_, !state_changed && !first_);
+    first_ = false;
     pc.lap(Phase::CoarseUpdate);
     // u += P~ c: prolongated straight into the iterate (no fine vector for the correction)
     C_.correction(opt_, r_.data(), mask_.data(), NodeBounds{&P_.contact_nodes(), lo_.data(), hi_.data()}, bounded, u.data(),
@@ -141,9 +146,18 @@ class MonotoneMultigridStep {
       VecMap<d>(it_.Au.data() + d * i) += y;
       return (CVecMap<d>(u.data() + d * i) - CVecMap<d>(old_.data() + d * i)).dot(y);
     });
+    const double step = std::sqrt(std::max(e, 0.0));
+    if (pg_.judge(step, best_step_)) {
+      // the coupling's step was no smaller than every step before: refused, the iterate back to
+      // x (feasible, as every iterate), A u with it; the cycle map changes: the history starts again
+      anderson_.reset();
+      parallel_for((Index)u.size(), [&](Index k) { u[k] = old_[k]; });
+      A.multiply(u.data(), it_.Au.data());
+    } else {
+      best_step_ = std::min(best_step_, step);
+    }
     pc.lap(Phase::Norm);
-    best_step_ = std::min(best_step_, std::sqrt(std::max(e, 0.0)));
-    return std::sqrt(std::max(e, 0.0));
+    return step;
   }
 
   // energy (with the Dirichlet offset and the friction term) and the contact counts
@@ -160,6 +174,7 @@ class MonotoneMultigridStep {
         if (s != NodeState::Free) { ++rec.active; (s == NodeState::Stick ? rec.stick : rec.slip)++; }
       }
     rec.energy = e;
+    rec.petrov_galerkin = pg_.state();
   }
 
   // ||u - u*||_A with u* canonical (taken to the contact frames first)
@@ -194,6 +209,7 @@ class MonotoneMultigridStep {
   // The law's linearization at every contact node; returns whether any bound is finite.
   bool linearize() {
     hessian_.clear();
+    coupling_.clear();
     if constexpr (!L::has_contact) return false;
     bool bounded = false;
     const auto& base = P_.base_mask();
@@ -204,6 +220,11 @@ class MonotoneMultigridStep {
                                hi_.data() + c * d, &Hc, P_.matrix().block(P_.matrix().diag[i])))
         bounded = true;
       if (!Hc.isZero(0.0)) hessian_.emplace_back(i, Hc);
+      if constexpr (L::coarse_freezes_bound)
+        if (pg_.wanted()) {
+          const Vec<d> w = bound_coupling<L, d>(P_.node(c), it_.u.data() + k, r_[k]);
+          if (!w.isZero(0.0)) coupling_.emplace_back(i, w);
+        }
     }
     return bounded;
   }
@@ -271,6 +292,9 @@ class MonotoneMultigridStep {
   std::vector<double> lo_, hi_;  // nc * d
   std::vector<std::pair<Index, Mat<d>>> hessian_;
   SettledAnderson& anderson_;
+  SettledPetrovGalerkin<d> pg_;  // declared after H_: clears its overlay of H_ first
+  std::vector<std::pair<Index, Vec<d>>> coupling_;  // sliding node -> w (bound_coupling), when wanted
+  bool first_ = true;
   double best_step_ = kInf;  // the smallest |u^{k+1} - u^k|_A of this solve
 };
 

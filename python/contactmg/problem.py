@@ -39,6 +39,8 @@ LINEAR_CORRECTIONS = ("pcg", "cycle", "coarse")
 SOLVE_TAKES_OMEGA = "omega:" in (_core.ContactSolver2D.solve.__doc__ or "")
 # Issue 11, fifth part: a separate over-relaxation of the post-smoothing sweeps (off by default)
 SOLVE_TAKES_OMEGA_POST = "omega_post:" in (_core.ContactSolver2D.solve.__doc__ or "")
+# Issue 11, seventh part: the sliding nodes' Petrov-Galerkin coupling on level L-1 in settled cycles (off by default)
+SOLVE_TAKES_PETROV_GALERKIN = "petrov_galerkin:" in (_core.ContactSolver2D.solve.__doc__ or "")
 # The default omega by cell type. Simplices: 1.3 (symmetric SOR). Nodal block Gauss-Seidel on P1
 # elasticity levels off near 0.34 per F(3,3) cycle on the adaptive Hertz levels (Q1: 0.14 on the
 # unit square); over-relaxed it contracts by 0.26 / 0.235 / 0.216 / 0.216 at level 11 with omega
@@ -420,6 +422,10 @@ class ContactProblem:
     # The post-smoothing sweeps' own over-relaxation (CycleOptions::omega_post; None: the same as
     # the pre-smoothing's). Off by default (issue 11, fifth part).
     smoother_omega_post: Optional[float] = None
+    # Algorithm 2's settled cycles with the sliding nodes' Petrov-Galerkin coupling on the top coarse
+    # level and a fallback to the symmetric one (CycleOptions::settled_petrov_galerkin; the "nmg"
+    # solves of a Coulomb problem). Off by default (issue 11, seventh part).
+    settled_petrov_galerkin: bool = False
 
     def smoothing_omega(self) -> float:
         """The over-relaxation the solves of this problem use (smoother_omega or the default)."""
@@ -504,7 +510,8 @@ class ContactProblem:
               progress: Optional[Callable[[dict], None]] = None, threads: int = 0,
               ordering: Optional[str] = None, fixed_point_stall_window: int = 0,
               linear: Optional[str] = None, lines: Optional[bool] = None,
-              omega: Optional[float] = None, omega_post: Optional[float] = None) -> ContactResult:
+              omega: Optional[float] = None, omega_post: Optional[float] = None,
+              petrov_galerkin: Optional[bool] = None) -> ContactResult:
         """Solve with `method`: "nmg" (Algorithm 2 for Coulomb; truncated monotone multigrid for
         frictionless and Tresca; linear multigrid without contact), "tnnmg" (truncated nonsmooth
         Newton multigrid: the fine nonlinear sweeps, one linear cycle for the truncated Newton
@@ -527,7 +534,12 @@ class ContactProblem:
         fixed_point_max); result.extra["outer_changes"] holds the change of every outer iteration.
         `omega`: over-relaxation of the unbounded block solves of every sweep (fine nodes without
         contact, coarse rows without bounds), in (0, 2); None: smoothing_omega(). `omega_post`: the
-        same for the post-smoothing sweeps only; None: smoother_omega_post, or omega if that is None."""
+        same for the post-smoothing sweeps only; None: smoother_omega_post, or omega if that is None.
+        `petrov_galerkin` ("nmg", and "linear"'s reference solve): in Algorithm 2's cycles whose contact
+        state has settled, the top coarse level also carries the sliding nodes' Petrov-Galerkin
+        coupling, switched off for the rest of the solve by a cycle that does not lower the fixed-point
+        residual; None: settled_petrov_galerkin. result.history["petrov_galerkin"]: 1 in the cycles
+        with it, 2 in the one that switched it off; result.extra["petrov_galerkin"] when on."""
         if method not in METHODS:
             raise ValueError(f"method must be one of {METHODS}, got {method!r}")
         options = self._options(cycle, nu1, nu2)
@@ -575,6 +587,17 @@ class ContactProblem:
             if not SOLVE_TAKES_OMEGA_POST:
                 raise ValueError("omega_post needs a core built with it (issue 11, fifth part)")
             kw["omega_post"] = omega_post
+        asked = petrov_galerkin is not None
+        petrov_galerkin = self.settled_petrov_galerkin if petrov_galerkin is None else petrov_galerkin
+        if not isinstance(petrov_galerkin, (bool, np.bool_)):
+            raise ValueError(f"petrov_galerkin must be True or False, got {petrov_galerkin!r}")
+        petrov_galerkin = bool(petrov_galerkin)
+        if petrov_galerkin and method not in ("nmg", "linear") and asked:
+            raise ValueError(f"petrov_galerkin is a choice of method 'nmg' (Algorithm 2), not {method!r}")
+        if petrov_galerkin and method == "nmg":
+            if not SOLVE_TAKES_PETROV_GALERKIN:
+                raise ValueError("petrov_galerkin needs a core built with it (issue 11, seventh part)")
+            kw["petrov_galerkin"] = True
         if SOLVE_TAKES_CYCLE_OPTIONS:
             kw.update(cycle=options.cycle, nu1=options.nu1, nu2=options.nu2, progress=progress)
         elif progress is not None:
@@ -599,7 +622,7 @@ class ContactProblem:
         if reference is None:
             reference = self.solve("nmg", tol=tol, rtol=rtol, max_cycles=max_cycles, cycle=options.cycle,
                                    nu1=options.nu1, nu2=options.nu2, threads=threads, ordering=ordering, omega=omega,
-                                   omega_post=omega_post)
+                                   omega_post=omega_post, petrov_galerkin=petrov_galerkin)
         t0 = time.perf_counter()
         solver = self._known_state_solver(reference, options)
         build = time.perf_counter() - t0
@@ -619,6 +642,11 @@ class ContactProblem:
         res.extra["omega"] = float(raw.get("omega", 1.0))
         if "omega_post" in raw:  # only when set (issue 11, fifth part)
             res.extra["omega_post"] = float(raw["omega_post"])
+        if raw.get("petrov_galerkin"):  # only when set (issue 11, seventh part)
+            pg = np.asarray(raw["history"]["petrov_galerkin"])
+            off = np.nonzero(pg == 2)[0]
+            res.extra["petrov_galerkin"] = {"cycles": int(np.count_nonzero(pg)),
+                                            "fallback_cycle": int(off[0]) + 1 if len(off) else None}
         if method == "fixed-point" and "outer_changes" in raw:
             res.extra["outer_changes"] = [float(c) for c in raw["outer_changes"]]
         if "threads" in raw:

@@ -1,0 +1,149 @@
+"""Algorithm 2's settled cycles with the sliding nodes' Petrov-Galerkin coupling on level L-1
+(issue 11, seventh part): CycleOptions::settled_petrov_galerkin, solve(petrov_galerkin=True),
+ContactProblem.settled_petrov_galerkin. Off by default. With it on the solve reaches the same
+solution and passes the independent check, the coupling is really used, the top coarse level is
+symmetric again after the solve, laws without an
+iterate-dependent bound ignore it, and the fallback refuses a cycle whose correction grows."""
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+from contactmg import hertz, sphere
+from contactmg.generators import HERTZ_TOP, hertz_half_disk
+from contactmg.hierarchy import MeshHierarchy
+from contactmg.material import Material
+from contactmg.obstacle import PlaneObstacle
+from contactmg.checks import contact_conditions
+from contactmg.friction import Tresca
+from contactmg.hertz import hertz_adaptive_hierarchy, hertz_problem
+from contactmg.problem import SOLVE_TAKES_PETROV_GALERKIN, ContactProblem, Dirichlet
+
+pytestmark = pytest.mark.skipif(not SOLVE_TAKES_PETROV_GALERKIN, reason="core without petrov_galerkin")
+
+
+def same_solution(p, a, b, rtol=1e-8):
+    ua, ub = np.asarray(a.displacement), np.asarray(b.displacement)
+    assert np.abs(ua - ub).max() <= rtol * np.abs(ua).max()
+    assert contact_conditions(p, b)["max"] <= 1e-8
+    assert np.array_equal(a.node_state, b.node_state)
+
+
+def test_off_by_default_and_bad_values():
+    p = hertz_problem("triangle", 3, 0.4)
+    assert p.settled_petrov_galerkin is False
+    r = p.solve()
+    assert "petrov_galerkin" not in r.extra
+    assert not np.any(r.history["petrov_galerkin"])
+    for bad in ("yes", 1, 0.0, [True]):
+        with pytest.raises(ValueError, match="petrov_galerkin must be True or False"):
+            p.solve(petrov_galerkin=bad)
+    for method in ("tnnmg", "fixed-point"):
+        with pytest.raises(ValueError, match="petrov_galerkin is a choice of method 'nmg'"):
+            p.solve(method, petrov_galerkin=True)
+    with pytest.raises(ValueError, match="petrov_galerkin must be True or False"):
+        p.solver.solve(petrov_galerkin=1)  # the core refuses what is not a bool
+    p.solve("tnnmg", petrov_galerkin=False)  # off is every method's
+
+
+@pytest.mark.parametrize("level, F", [(5, 0.4), (5, 2.0), (6, 1.0)])
+def test_same_solution_with_the_coupling_in_use(level, F):
+    p = hertz_problem("triangle", level, F, coulomb_at_zero=True)
+    off = p.solve(threads=1)
+    on = p.solve(threads=1, petrov_galerkin=True)
+    assert off.converged and on.converged
+    same_solution(p, off, on)
+    pg = on.history["petrov_galerkin"]
+    assert on.extra["petrov_galerkin"]["cycles"] == np.count_nonzero(pg) > 0  # the coupling was used
+    assert set(np.unique(pg)) <= {0, 1}
+    # only in settled cycles: the truncation of the cycle before (so never where it was rebuilt in 2D)
+    assert not np.any(on.history["rebuilt"][pg > 0])
+    assert abs(on.cycles - off.cycles) <= 2
+    # the solve leaves the top coarse level symmetric again: the coupling's term (F K_n entries) is gone
+    top = p.solver.coarse_matrix(p.hierarchy.levels - 2)
+    m = top_matrix(top)
+    assert abs(m - m.T).max() <= 1e-12 * abs(m).max()
+    p.solver.rebuild_coarse()
+    assert abs(top_matrix(p.solver.coarse_matrix(p.hierarchy.levels - 2)) - m).max() <= 1e-11 * abs(m).max()
+
+
+def top_matrix(A):
+    return sp.bsr_matrix((np.asarray(A.data), np.asarray(A.indices), np.asarray(A.indptr)), shape=A.shape).tocsr()
+
+
+@pytest.mark.parametrize("ordering", ["coloured", "lexicographic"])
+def test_orderings_and_threads_agree(ordering):
+    # the overlay is put into the top level as stored (by colours when coloured): the same solution,
+    # and the same bits on 1 and 2 threads
+    p = hertz_problem("triangle", 5, 2.0, coulomb_at_zero=True)
+    off = p.solve(threads=1, ordering=ordering)
+    one = p.solve(threads=1, ordering=ordering, petrov_galerkin=True)
+    two = hertz_problem("triangle", 5, 2.0, coulomb_at_zero=True).solve(threads=2, ordering=ordering, petrov_galerkin=True)
+    same_solution(p, off, one)
+    assert one.extra["petrov_galerkin"]["cycles"] > 0
+    fresh = hertz_problem("triangle", 5, 2.0, coulomb_at_zero=True).solve(threads=1, ordering=ordering, petrov_galerkin=True)
+    assert np.array_equal(np.asarray(fresh.displacement), np.asarray(two.displacement))
+
+
+def test_problem_default_and_linear_reference():
+    p = hertz_problem("triangle", 5, 2.0, coulomb_at_zero=True)
+    p.settled_petrov_galerkin = True
+    r = p.solve(threads=1)
+    assert r.extra["petrov_galerkin"]["cycles"] > 0
+    assert p.solve(threads=1, petrov_galerkin=False).extra.get("petrov_galerkin") is None
+    lin = p.solve("linear", threads=1)  # its reference solve takes the problem's choice
+    assert lin.converged
+    p.solve("tnnmg", threads=1)  # the problem's default does not stop the other methods
+
+
+def test_laws_without_an_iterate_dependent_bound_ignore_it():
+    # frictionless (F = 0) and Tresca: no bound moves with r_n, so no coupling (bound_slope = 0); two
+    # fresh problems, as a kept hierarchy's incremental updates depend on the solves before
+    for make in (lambda: hertz_problem("triangle", 5, 0.0), lambda: tresca_problem(5)):
+        a, b = make().solve(threads=1), make().solve(threads=1, petrov_galerkin=True)
+        assert np.array_equal(np.asarray(a.displacement), np.asarray(b.displacement))
+        assert not np.any(b.history["petrov_galerkin"]) and b.extra["petrov_galerkin"]["cycles"] == 0
+
+
+def tresca_problem(level):
+    h = MeshHierarchy.build(hertz_half_disk("triangle"), level, projector=hertz.hertz_projector())
+    return ContactProblem(h, Material(hertz.E, hertz.NU), [Dirichlet([HERTZ_TOP], (0.0, hertz.TOP_DISPLACEMENT))],
+                          contact_tags=[1], obstacle=PlaneObstacle((0.0, 0.0), (0.0, -1.0)), friction=Tresca(30.0))
+
+
+def test_3d_coulomb_same_solution():
+    # the d = 3 template: sliding nodes' Hessian blocks rebuild the levels every cycle, the overlay with them
+    h = sphere.sphere_adaptive_hierarchy(3, friction=0.4)
+    for F in (0.1, 0.4):
+        p = sphere.sphere_problem("tetra", 3, F, hierarchy=h)
+        off = p.solve(threads=1)
+        on = p.solve(threads=1, petrov_galerkin=True)
+        assert off.converged and on.converged
+        same_solution(p, off, on)
+        assert on.extra["petrov_galerkin"]["cycles"] > 0
+        assert abs(on.cycles - off.cycles) <= 2
+
+
+@pytest.fixture(scope="module")
+def adaptive7():
+    return hertz_adaptive_hierarchy(7, 0.4)
+
+
+def test_fallback_refuses_a_growing_cycle(adaptive7):
+    # adaptive level 7 at F = 8: two isolated sliding nodes at the contact edge, where the coupling's
+    # oblique coarse correction amplifies their mode (docs/history/adaptive.md, sixth part: two-grid
+    # 1.94 against 0.64); its first settled cycle grows and is refused
+    p = hertz_problem("triangle", 7, 8.0, coulomb_at_zero=True, hierarchy=adaptive7)
+    off = p.solve(threads=1)
+    on = p.solve(threads=1, petrov_galerkin=True)
+    pg = on.history["petrov_galerkin"]
+    k = on.extra["petrov_galerkin"]["fallback_cycle"]
+    assert k is not None and pg[k - 1] == 2
+    assert not np.any(pg[k:])  # off for the rest of the solve
+    c = on.history["correction_norm"]
+    assert c[k - 1] >= c[:k - 1].min()  # what the test refused
+    # refused: the energy after that cycle is the one before it (the iterate went back)
+    e = on.history["energy"]
+    assert e[k - 1] == pytest.approx(e[k - 2], rel=1e-13, abs=1e-13 * abs(e[k - 2]))
+    assert on.converged
+    same_solution(p, off, on)
+    assert on.cycles <= off.cycles + 2
