@@ -602,6 +602,10 @@ PYBIND11_MODULE(_core, m) {
              "tests and benchmarks: solvers built from now on colour (and store by colours) every level in its locality "
              "order (True, the default) or in the user's numbering (False, as before issue 15's locality order); returns the "
              "previous setting (None: only returns it)");
+  def_switch(m, "_fused_residual_restriction", &fused_residual_restriction, "on",
+             "tests and benchmarks: the cycles restrict every level's residual as it is formed, without a residual vector "
+             "(True, the default), or form the vector first and restrict it (False, as before); the same bits either way; "
+             "returns the previous setting (None: only returns it)");
   def_switch(m, "_keep_cycle_workspace", &keep_cycle_workspace, "on",
              "tests and benchmarks: a solver keeps the fine vectors of its cycles (r, u_old, the Anderson history) from one "
              "solve to the next (True, the default) or every solve allocates them again (False, as before); returns the "
