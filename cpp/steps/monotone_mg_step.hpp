@@ -73,6 +73,12 @@ class MonotoneMultigridStep {
     mask_ = P.base_mask();
     r_.assign(n, 0.0); old_.assign(n, 0.0);  // of the same size: no new pages
     anderson_.reset();  // a kept workspace: its slots stay, the history of the last solve goes
+    // A kept workspace takes all its Anderson slots before the first cycle of its first solve (the
+    // solver's later solves need them all the same); a step's own workspace (the command line's
+    // single solves) allocates them as the history fills, so a solve that never mixes does not
+    // hold them at its peak.
+    if constexpr (L::coarse_freezes_bound)
+      if (work) anderson_.reserve(n);
     lo_.assign(P.num_contact() * d, -kInf); hi_.assign(P.num_contact() * d, kInf);  // bounds live at contact nodes only
   }
 
