@@ -202,7 +202,8 @@ def time_level(make, label, repeats, threads, stream):
         sweeps = float(np.median([(r.phase_seconds["presmooth"] + r.phase_seconds["postsmooth"]) / (nu * r.cycles) for r in rs]))
         rate = stream.get(f"core_{t}", stream["numpy_1"]) * 1e9
         # where a cycle's time goes: the step's phases (norm: the Anderson mixing and the fused
-        # A (u - u_old) pass; linearize: the fine residual and the contact linearization) and the
+        # A (u - u_old) pass; linearize: the contact linearization with the contact rows' residual -- the
+        # fine residual's other rows are formed in the coarse correction's restriction since perf6) and the
         # rest of the loop (the energy record, the step's setup), ms per cycle, medians
         phases = {k: 1e3 * float(np.median([r.phase_seconds.get(k, 0.0) / r.cycles for r in rs]))
                   for k in ("presmooth", "linearize", "coarse_update", "coarse_correction", "postsmooth", "norm", "check")}
@@ -258,7 +259,8 @@ def table(res) -> str:
                          " | ".join(f"{a['cycle_over_reference'].get(k, float('nan')):.2f}" for k in refs) +
                          f" | {a['cycle_over_stream_stop23']:.2f} |")
     lines += ["", "Where a cycle's time goes (ms per cycle; fine sweeps = presmooth + postsmooth; norm = Anderson mixing + the fused "
-              "A (u - u_old) pass; linearize includes the fine residual; other = the loop's energy record and the step's setup):", "",
+              "A (u - u_old) pass; linearize: the contact rows' residual and linearization, the fine residual's other rows in the coarse "
+              "correction (before perf6: in linearize); other = the loop's energy record and the step's setup):", "",
               "| case | config | threads | presmooth | postsmooth | linearize | coarse update | coarse correction | norm | check | other |",
               "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
     for r in res["rows"]:
