@@ -69,8 +69,8 @@ def numpy_read_gbs(n: int = 40_000_000, repeats: int = 5) -> float:
 def stream_rates() -> dict:
     """The core's triad a = b + 1.5 c (24 bytes an entry, 40M doubles) on 1 and 2 threads, and numpy's;
     the read references (issue 15: a cycle mostly reads): the core's sum over 40M doubles read as 4
-    pieces at once (core_read_T) and as one (core_read1_1), its matrix-like read of 2x2 blocks with
-    int32 columns (core_blocks_1), numpy's sum (numpy_read_1)."""
+    pieces at once (core_read_T) and as one (core_read1_1), its matrix-like read of 2x2 and 3x3 blocks
+    with int32 columns (core_blocks_1, core_blocks3_1), numpy's sum (numpy_read_1)."""
     from contactmg import _core
     out = {"numpy_1": triad_gbs(), "numpy_read_1": numpy_read_gbs()}
     if hasattr(_core, "stream_triad"):
@@ -81,6 +81,7 @@ def stream_rates() -> dict:
             out[f"core_read_{t}"] = _core.stream_read(40_000_000, 5, t, 4)
         out["core_read1_1"] = _core.stream_read(40_000_000, 5, 1, 1)
         out["core_blocks_1"] = _core.stream_read_blocks(9_000_000, 5, 1, 2)
+        out["core_blocks3_1"] = _core.stream_read_blocks(4_000_000, 5, 1, 3)
     return out
 
 
@@ -94,6 +95,7 @@ def references(stream: dict, t: int) -> dict:
     ref["core read, 4 pieces"] = stream.get(f"core_read_{t}")
     ref["core read, 1 piece"] = stream.get("core_read1_1")
     ref["core 2x2 blocks + int32"] = stream.get("core_blocks_1")
+    ref["core 3x3 blocks + int32"] = stream.get("core_blocks3_1")
     ref["numpy sum"] = stream.get("numpy_read_1")
     return {k: v for k, v in ref.items() if v}
 
