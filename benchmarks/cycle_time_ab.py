@@ -5,8 +5,8 @@ alternating processes (the machine may be shared: the load average is printed wi
     python benchmarks/cycle_time_ab.py [--levels 8 9] [--repeats 3] [--threads 1 2] [--sphere tetra:3] [--label L] [--json out.json]
 
 Medians over --repeats solves of one solver; also the fine sweep (ms), the phases of a cycle (ms)
-and the core's stream triad on 1 and 2 threads at the start. Runs with any build of the core (it
-uses no switch that a build may lack).
+and the core's stream triad on 1 and 2 threads at the start (and its 4-piece read where the build
+has it). Runs with any build of the core (it uses no switch that a build may lack).
 """
 from __future__ import annotations
 
@@ -59,6 +59,8 @@ def main():
     a = ap.parse_args()
     res = {"label": a.label, "core": _core.__file__, "load_before": load(),
            "stream": {f"core_{t}": _core.stream_triad(40_000_000, 5, t) for t in (1, 2)}, "rows": []}
+    if hasattr(_core, "stream_read"):  # the read reference of issue 15 (builds from perf6 on)
+        res["stream"].update({f"core_read_{t}": _core.stream_read(40_000_000, 5, t, 4) for t in (1, 2)})
     print(a.label, "stream GB/s", res["stream"], "load", load(), flush=True)
     for lev in a.levels:
         res["rows"] += measure(hertz_problem("triangle", lev, 0.4), f"hertz-2d-L{lev}", a.repeats, a.threads)

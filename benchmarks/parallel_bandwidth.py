@@ -13,8 +13,10 @@ interleaved (the machine may be shared: the load average is printed with every r
 pointers, diagonal positions, iterate read and written, load) over the measured time of
 a sweep, the bytes of a whole cycle (cycle_bytes: every sweep, product, restriction and
 prolongation on every level) over the time of a cycle, and the core's stream triad a = b + 1.5 c
-on 1 and 2 threads (and numpy's) measured in the same run, before and after. Ends with the whole
-table in markdown.
+on 1 and 2 threads (and numpy's) measured in the same run, before and after; and the cycle / stream
+time against every reference (stream_rates, references: the triads, and the read rates a cycle that
+mostly reads is bound by -- a sum over one array read as 4 pieces or 1, a matrix-like read of 2x2
+blocks with int32 columns, numpy's sum). Ends with the whole table in markdown.
 memory: peak resident memory of a Hertz solve (--dim 3: the sphere, --cell tetra or hexahedron) in a
 fresh process: the CLI itself, then a worker on the CLI's path (the problem releases its Python
 hierarchy and vectors once the core solver is built, as the CLI's single solves do) that reports what
@@ -39,7 +41,10 @@ def load() -> str:
 
 
 def triad_gbs(n: int = 20_000_000, repeats: int = 5) -> float:
-    """numpy: bytes moved by a = b + s c in two passes (5 x 8 bytes per entry) over the best time."""
+    """numpy: bytes moved by a = b + s c in two passes (5 x 8 bytes per entry) over the best time.
+    Its second pass (a = a + b in place) stores into lines it has just read, with no write-allocate
+    traffic, and ran at 25.5 GB/s here where a pass that allocates (a = 1.5 c) ran at 13.9 (its 16
+    counted bytes; 24 moved): numpy's figure mixes the two and is no read rate (docs/history/threads.md)."""
     b, c, a = np.random.rand(n), np.random.rand(n), np.empty(n)
     best = np.inf
     for _ in range(repeats):
@@ -50,14 +55,49 @@ def triad_gbs(n: int = 20_000_000, repeats: int = 5) -> float:
     return 5 * 8 * n / best / 1e9
 
 
+def numpy_read_gbs(n: int = 40_000_000, repeats: int = 5) -> float:
+    """numpy: a sum over n doubles (8 bytes an entry, read only; numpy's own SIMD loops)."""
+    a = np.random.rand(n)
+    best = np.inf
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        a.sum()
+        best = min(best, time.perf_counter() - t0)
+    return 8 * n / best / 1e9
+
+
 def stream_rates() -> dict:
-    """The core's triad a = b + 1.5 c (24 bytes an entry, 40M doubles) on 1 and 2 threads, and numpy's."""
+    """The core's triad a = b + 1.5 c (24 bytes an entry, 40M doubles) on 1 and 2 threads, and numpy's;
+    the read references (issue 15: a cycle mostly reads): the core's sum over 40M doubles read as 4
+    pieces at once (core_read_T) and as one (core_read1_1), its matrix-like read of 2x2 and 3x3 blocks
+    with int32 columns (core_blocks_1, core_blocks3_1), numpy's sum (numpy_read_1)."""
     from contactmg import _core
-    out = {"numpy_1": triad_gbs()}
+    out = {"numpy_1": triad_gbs(), "numpy_read_1": numpy_read_gbs()}
     if hasattr(_core, "stream_triad"):
         for t in (1, 2):
             out[f"core_{t}"] = _core.stream_triad(40_000_000, 5, t)
+    if hasattr(_core, "stream_read"):
+        for t in (1, 2):
+            out[f"core_read_{t}"] = _core.stream_read(40_000_000, 5, t, 4)
+        out["core_read1_1"] = _core.stream_read(40_000_000, 5, 1, 1)
+        out["core_blocks_1"] = _core.stream_read_blocks(9_000_000, 5, 1, 2)
+        out["core_blocks3_1"] = _core.stream_read_blocks(4_000_000, 5, 1, 3)
     return out
+
+
+def references(stream: dict, t: int) -> dict:
+    """The rates (GB/s) a cycle on t threads is set against: the core triad as counted (24 bytes an
+    entry) and with its write-allocate bytes (32), numpy's triad, the core's 4- and 1-piece reads,
+    its matrix-like read and numpy's sum (one-thread figures where no t-thread one is measured)."""
+    ref = {"core triad": stream.get(f"core_{t}"), "numpy triad": stream.get("numpy_1")}
+    if ref["core triad"]:
+        ref["core triad + write-allocate"] = ref["core triad"] * 32 / 24
+    ref["core read, 4 pieces"] = stream.get(f"core_read_{t}")
+    ref["core read, 1 piece"] = stream.get("core_read1_1")
+    ref["core 2x2 blocks + int32"] = stream.get("core_blocks_1")
+    ref["core 3x3 blocks + int32"] = stream.get("core_blocks3_1")
+    ref["numpy sum"] = stream.get("numpy_read_1")
+    return {k: v for k, v in ref.items() if v}
 
 
 # The configurations of a level: (label, storage order of the core solver, ordering of the sweeps)
@@ -76,12 +116,37 @@ def transfer_bytes(t, d: int) -> int:
     return len(t.parent) * (8 + 4) + 8 * (t.n_fine + 1)
 
 
+def coarse_visits(top: int, cycle: str) -> tuple:
+    """How often a coarse correction (mg/cycle.hpp, CoarseCycle::correction and ::cycle) smooths
+    each coarse level 0 .. top (nu1 + nu2 sweeps a visit; level 0 is solved instead) and forms its
+    residual, restricts it and prolongates back (levels 1 .. top). A W- or F-cycle visits level top
+    a second time from the fine level (a V- or W-cycle), and each visit of a level of a W/F-cycle
+    visits the next coarser level twice (F: an F- then a V-cycle). F-cycle of top 7: level 7
+    smoothed 2 times, level l top - l + 2 times."""
+    smooth, resid = [0] * (top + 1), [0] * (top + 1)
+
+    def visit(l, t):
+        smooth[l] += 1
+        if l == 0:
+            return
+        for v in range(1 if t == "V" else 2):
+            resid[l] += 1
+            visit(l - 1, "V" if (t == "F" and v == 1) else t)
+
+    visit(top, cycle)
+    if cycle != "V":
+        visit(top, "V" if cycle == "F" else "W")
+    return smooth, resid
+
+
 def cycle_bytes(p, S) -> dict:
     """Bytes a cycle must read once per sweep and product on every level (a model of the passes,
     not a measurement): a sweep reads the matrix, the inverted diagonal blocks, the iterate and the
     right-hand side and writes the iterate; a product reads the matrix and x and writes y; a
-    restriction and a prolongation read the prolongation and both vectors. F-cycle: coarse level l
-    of T is smoothed T - l + 1 times and restricted from T - l + 2 times; V: once each."""
+    restriction and a prolongation read the prolongation and both vectors. Each coarse level as
+    often as coarse_visits counts it. Until stop 23 the model took an F-cycle's level l as smoothed
+    top - l + 1 and restricted top - l + 2 times, one visit short on every level (the second visit
+    of level top from the fine level, issue 10): "coarse_stop23" / "total_stop23" keep that count."""
     d = p.mesh.dim
     opt = p.default_cycle
     nu = opt.nu1 + opt.nu2
@@ -96,19 +161,21 @@ def cycle_bytes(p, S) -> dict:
     fine_sweep = lambda M, n: M + 3 * vec(n)
     prod = lambda M, n: M + 2 * vec(n)
     fine = nu * fine_sweep(A, fine_n) + 2 * prod(A, fine_n)
-    coarse = 0
     T = p.hierarchy.transfers
     fine_transfer = transfer_bytes(T[-1], d) + vec(T[-1].n_fine) + vec(T[-1].n_coarse)
     fine += 2 * fine_transfer
+    smooth, resid = coarse_visits(top, opt.cycle) if top >= 0 else ([], [])
+    coarse = coarse_stop23 = 0
     for l in range(1, levels):
         n = T[l - 1].n_fine  # T[l - 1] prolongs level l - 1 to level l
         M = matrix_bytes(S.coarse_matrix(l))
-        smooth = (top - l + 1) if opt.cycle == "F" else 1
-        restrict = (top - l + 2) if opt.cycle == "F" else 1
         tb = transfer_bytes(T[l - 1], d) + vec(T[l - 1].n_fine) + vec(T[l - 1].n_coarse)
-        coarse += smooth * nu * sweep(M, n) + restrict * (prod(M, n) + 2 * tb)
-    return {"fine": fine, "coarse": coarse, "total": fine + coarse,
-            "sweep": fine_sweep(A, fine_n)}
+        coarse += smooth[l] * nu * sweep(M, n) + resid[l] * (prod(M, n) + 2 * tb)
+        smooth23 = (top - l + 1) if opt.cycle == "F" else 1
+        restrict23 = (top - l + 2) if opt.cycle == "F" else 1
+        coarse_stop23 += smooth23 * nu * sweep(M, n) + restrict23 * (prod(M, n) + 2 * tb)
+    return {"fine": fine, "coarse": coarse, "total": fine + coarse, "sweep": fine_sweep(A, fine_n),
+            "coarse_stop23": coarse_stop23, "total_stop23": fine + coarse_stop23}
 
 
 def time_level(make, label, repeats, threads, stream):
@@ -137,7 +204,8 @@ def time_level(make, label, repeats, threads, stream):
         sweeps = float(np.median([(r.phase_seconds["presmooth"] + r.phase_seconds["postsmooth"]) / (nu * r.cycles) for r in rs]))
         rate = stream.get(f"core_{t}", stream["numpy_1"]) * 1e9
         # where a cycle's time goes: the step's phases (norm: the Anderson mixing and the fused
-        # A (u - u_old) pass; linearize: the fine residual and the contact linearization) and the
+        # A (u - u_old) pass; linearize: the contact linearization with the contact rows' residual -- the
+        # fine residual's other rows are formed in the coarse correction's restriction since perf6) and the
         # rest of the loop (the energy record, the step's setup), ms per cycle, medians
         phases = {k: 1e3 * float(np.median([r.phase_seconds.get(k, 0.0) / r.cycles for r in rs]))
                   for k in ("presmooth", "linearize", "coarse_update", "coarse_correction", "postsmooth", "norm", "check")}
@@ -146,6 +214,9 @@ def time_level(make, label, repeats, threads, stream):
                         cycles=rs[0].cycles, seconds_per_cycle=spc, seconds_per_fine_sweep=sweeps,
                         sweep_bytes=b["sweep"], sweep_gbs=b["sweep"] / sweeps / 1e9, cycle_bytes=b["total"],
                         cycle_gbs=b["total"] / spc / 1e9, stream_gbs=rate / 1e9, cycle_over_stream=spc / (b["total"] / rate),
+                        cycle_bytes_stop23=b["total_stop23"], cycle_over_stream_stop23=spc / (b["total_stop23"] / rate),
+                        coarse_bytes=b["coarse"], fine_bytes=b["fine"],
+                        cycle_over_reference={k: spc / (b["total"] / (v * 1e9)) for k, v in references(stream, t).items()},
                         converged=all(r.converged for r in rs), load=load(), phase_ms=phases))
         print(json.dumps(out[-1]), flush=True)
     base = {(r["config"], r["threads"]): r["seconds_per_cycle"] for r in out}
@@ -175,8 +246,23 @@ def table(res) -> str:
         if a and b:
             lines.append(f"| {case} | {a['dofs']:,} | {a['cycles']} | {a['seconds_per_cycle']:.3f} | {b['seconds_per_cycle']:.3f} | "
                          f"{a['seconds_per_cycle'] / b['seconds_per_cycle']:.2f}x | {a['cycle_over_stream']:.2f} | {b['cycle_over_stream']:.2f} |")
+    # the same cycles against every reference (issue 15: the cycle mostly reads; no one figure is "the" bandwidth)
+    refs = list(dict.fromkeys(k for r in res["rows"] for k in r.get("cycle_over_reference", {})))
+    rates = references(s, 1)
+    lines += ["", "Cycle / stream time, coloured by colours, 1 thread, against each reference (GB/s of the run in the header; "
+              "model bytes: every visit of coarse_visits; the stop-23 model in the last column, at the core triad):", "",
+              "| case | model GB / cycle | " + " | ".join(f"{k} ({rates.get(k, float('nan')):.1f})" for k in refs) +
+              " | stop-23 model, core triad |",
+              "| --- | --- | " + " | ".join("---" for _ in refs) + " | --- |"]
+    for case in dict.fromkeys(r["case"] for r in res["rows"]):
+        a = by.get((case, 1))
+        if a and "cycle_over_reference" in a:
+            lines.append(f"| {case} | {a['cycle_bytes'] / 1e9:.2f} (stop 23: {a['cycle_bytes_stop23'] / 1e9:.2f}) | " +
+                         " | ".join(f"{a['cycle_over_reference'].get(k, float('nan')):.2f}" for k in refs) +
+                         f" | {a['cycle_over_stream_stop23']:.2f} |")
     lines += ["", "Where a cycle's time goes (ms per cycle; fine sweeps = presmooth + postsmooth; norm = Anderson mixing + the fused "
-              "A (u - u_old) pass; linearize includes the fine residual; other = the loop's energy record and the step's setup):", "",
+              "A (u - u_old) pass; linearize: the contact rows' residual and linearization, the fine residual's other rows in the coarse "
+              "correction (before perf6: in linearize); other = the loop's energy record and the step's setup):", "",
               "| case | config | threads | presmooth | postsmooth | linearize | coarse update | coarse correction | norm | check | other |",
               "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
     for r in res["rows"]:

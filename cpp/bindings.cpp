@@ -584,6 +584,23 @@ PYBIND11_MODULE(_core, m) {
     return triad_bytes_per_second(n, repeats) / 1e9;
   }, py::arg("n") = 40000000, py::arg("repeats") = 5, py::arg("threads") = 1,
   "GB/s of the triad a = b + 1.5 c over n doubles on `threads` threads (best of `repeats`; 24 bytes an entry)");
+  m.def("stream_read", [](Index n, int repeats, int threads, int streams) {
+    if (n < 64 || repeats < 1) throw InputError("stream_read needs n >= 64 and repeats >= 1");
+    py::gil_scoped_release release;
+    ThreadScope team(threads);
+    return read_bytes_per_second(n, repeats, streams) / 1e9;
+  }, py::arg("n") = 40000000, py::arg("repeats") = 5, py::arg("threads") = 1, py::arg("streams") = 4,
+  "GB/s of a sum over n doubles on `threads` threads, each thread's part read as `streams` (1, 2, 4, 8) pieces at once "
+  "(best of `repeats`; 8 bytes an entry, read only)");
+  m.def("stream_read_blocks", [](Index blocks, int repeats, int threads, int dim) {
+    if (blocks < 64 || repeats < 1) throw InputError("stream_read_blocks needs blocks >= 64 and repeats >= 1");
+    if (dim != 2 && dim != 3) throw InputError("dim must be 2 or 3");
+    py::gil_scoped_release release;
+    ThreadScope team(threads);
+    return (dim == 2 ? block_read_bytes_per_second<2>(blocks, repeats, 7) : block_read_bytes_per_second<3>(blocks, repeats, 15)) / 1e9;
+  }, py::arg("blocks") = 9000000, py::arg("repeats") = 5, py::arg("threads") = 1, py::arg("dim") = 2,
+  "GB/s of a matrix-like read: `blocks` dim x dim blocks of doubles with int32 columns (8 dim^2 + 4 bytes a block; 7 "
+  "(2D) or 15 (3D) a row) times a cache-resident x through the row passes' kernel (best of `repeats`)");
   def_switch(m, "_fine_sweep_generic", &fine_sweep_generic, "on",
              "tests: every fine nonlinear sweep through the per-row path (True) or the range kernel where the level is "
              "stored by colours (False, the default); returns the previous setting (None: only returns it)");
@@ -597,6 +614,10 @@ PYBIND11_MODULE(_core, m) {
              "tests and benchmarks: solvers built from now on colour (and store by colours) every level in its locality "
              "order (True, the default) or in the user's numbering (False, as before issue 15's locality order); returns the "
              "previous setting (None: only returns it)");
+  def_switch(m, "_fused_residual_restriction", &fused_residual_restriction, "on",
+             "tests and benchmarks: the cycles restrict every level's residual as it is formed, without a residual vector "
+             "(True, the default), or form the vector first and restrict it (False, as before); the same bits either way; "
+             "returns the previous setting (None: only returns it)");
   def_switch(m, "_keep_cycle_workspace", &keep_cycle_workspace, "on",
              "tests and benchmarks: a solver keeps the fine vectors of its cycles (r, u_old, the Anderson history) from one "
              "solve to the next (True, the default) or every solve allocates them again (False, as before); returns the "

@@ -180,16 +180,24 @@ struct BlockMatrix {
     });
   }
 
+  // s = (b - A x)_i, with the prefetches of the row passes (vals: what with_values gives). The one
+  // row kernel of residual() and of the residual restricted in the same pass (mg/transfer.hpp):
+  // the same bits either way.
+  template <class V>
+  CMG_PREFETCH_INLINE void residual_row(const V* vals, const double* x, const double* b, Index i, Index ahead, double* s) const {
+    prefetch_ahead(i, x);
+    prefetch_row_values<d>(vals, indptr.data(), i, ahead, rows);
+    for (int a = 0; a < d; ++a) s[a] = b[d * i + a];
+    accumulate_blocks<d, true>(vals, indices.data(), indptr[i], indptr[i + 1], x, s);
+  }
+
   // r = b - A x in one pass (a product and a vector update fused)
   void residual(const double* x, const double* b, double* r) const {
     const Index ahead = prefetch_value_rows();
     with_values([&](const auto* vals) {
       parallel_for(rows, [&](Index i) {
-        prefetch_ahead(i, x);
-        prefetch_row_values<d>(vals, indptr.data(), i, ahead, rows);
         double s[d];
-        for (int a = 0; a < d; ++a) s[a] = b[d * i + a];
-        accumulate_blocks<d, true>(vals, indices.data(), indptr[i], indptr[i + 1], x, s);
+        residual_row(vals, x, b, i, ahead, s);
         for (int a = 0; a < d; ++a) r[d * i + a] = s[a];
       });
     });

@@ -47,6 +47,18 @@ def test_a_second_solve_touches_no_new_fine_vector_in_its_cycles(ordering):
     assert fresh > 4 * pages, (fresh, pages)
 
 
+@pytest.mark.parametrize("ordering", ["coloured", "lexicographic"])
+def test_a_first_solve_touches_no_new_fine_vector_in_its_cycles(ordering):
+    # a kept workspace takes its Anderson slots before the first cycle of the first solve: the
+    # cycles where the history fills (F = 0.4 slides) touch no new fine page either
+    p = hertz_problem("triangle", 7, 0.4)
+    p.default_ordering = ordering
+    p.solver
+    pages = p.mesh.num_points * 2 * 8 / resource.getpagesize()
+    faults, r = faults_in_cycles(p, ordering)
+    assert faults < 0.25 * pages, (faults, pages)
+
+
 def test_a_kept_workspace_changes_no_bit():
     # the same sequence of solves on two problems, one keeping its workspace, one not: the same bits
     out = {}

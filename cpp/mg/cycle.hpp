@@ -129,6 +129,14 @@ class CoarseCycle {
   // cycle keeps its point sweeps).
   void correction(const CycleOptions& opt, const double* r_fine, const std::uint8_t* mask, const NodeBounds& bounds,
                   bool bounded, double* w, Index n_fine, bool add = false, bool lines = false) {
+    correction_of(opt, [&](Index i) { return Vec<d>(CVecMap<d>(r_fine + d * i)); }, mask, bounds, bounded, w, n_fine, add, lines);
+  }
+
+  // The same with the fine residual's rows given by fine_row(i) (a Vec<d>), in fine row order:
+  // the monotone step forms them as they are restricted (steps/monotone_mg_step.hpp).
+  template <class Row>
+  void correction_of(const CycleOptions& opt, Row&& fine_row, const std::uint8_t* mask, const NodeBounds& bounds, bool bounded,
+                     double* w, Index n_fine, bool add = false, bool lines = false) {
     const int top = (int)lv_.size() - 1;
     if (top < 0) {  // a single level: the smoother alone
       if (!add) std::fill(w, w + n_fine * d, 0.0);
@@ -136,7 +144,7 @@ class CoarseCycle {
     }
     const Prolongation<d>& P = H_.prolongation(top);
     Vectors& C = lv_[top];
-    restrict_residual<d>(P, mask, r_fine, C.b.data(), C.r.data());  // C.r: scratch until level top smooths
+    restrict_of<d>(P, mask, fine_row, C.b.data(), C.r.data());  // C.r: scratch until level top smooths
     if (bounded) restrict_bounds<d>(P, mask, bounds, C.lo.data(), C.hi.data());
     set_bounded(C, bounded);
     zero(C.x);
@@ -216,8 +224,12 @@ class CoarseCycle {
     Vectors& C = lv_[l - 1];
     const Prolongation<d>& P = H_.prolongation(l - 1);
     for (int v = 0; v < visits; ++v) {
-      A.residual(L.x.data(), L.b.data(), L.r.data());  // one pass (was a product and a vector pass)
-      restrict_residual<d>(P, nullptr, L.r.data(), C.b.data(), C.r.data());
+      // b - A x restricted as it is formed (one pass over A; was a residual pass, then the restriction)
+      if (fused_residual_restriction()) restrict_level_residual<d>(A, P, L.x.data(), L.b.data(), C.b.data(), C.r.data());
+      else {
+        A.residual(L.x.data(), L.b.data(), L.r.data());
+        restrict_residual<d>(P, nullptr, L.r.data(), C.b.data(), C.r.data());
+      }
       // the coarser level gets the slack that remains on this one
       if (L.any_bounds) restrict_slack<d>(P, L.lo.data(), L.hi.data(), L.x.data(), C.lo.data(), C.hi.data(), L.bounded.data());
       set_bounded(C, L.any_bounds);

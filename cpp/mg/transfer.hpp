@@ -42,11 +42,11 @@ void prolongate(const Prolongation<d>& P, const std::uint8_t* mask, const double
   });
 }
 
-// y_coarse += P^T diag(mask) r_fine over the fine rows [first, last), in row order
-template <int d>
-inline void restrict_rows(const Prolongation<d>& P, const std::uint8_t* mask, const double* rf, double* yc, Index first, Index last) {
+// y_coarse += P^T diag(mask) r over the fine rows [first, last), in row order; r_i = row(i), a Vec<d>
+template <int d, class Row>
+inline void restrict_rows_of(const Prolongation<d>& P, const std::uint8_t* mask, Row&& row, double* yc, Index first, Index last) {
   for (Index i = first; i < last; ++i) {
-    Vec<d> r = CVecMap<d>(rf + d * i);
+    Vec<d> r = row(i);
     if (mask)
       for (int c = 0; c < d; ++c) r[c] *= mask[i * d + c];
     if (!P.rotated(i)) {
@@ -57,23 +57,53 @@ inline void restrict_rows(const Prolongation<d>& P, const std::uint8_t* mask, co
   }
 }
 
-// y_coarse = P^T diag(mask) r_fine. A scatter: the fine rows are split into two fixed halves, the
-// first summed into y, the second into `scratch` (coarse size), then y += scratch -- on two
-// threads at once, and the same sums in the same order on any thread count (bit for bit).
-template <int d>
-void restrict_residual(const Prolongation<d>& P, const std::uint8_t* mask, const double* rf, double* yc, double* scratch) {
+// y_coarse = P^T diag(mask) r with r_i = row(i). A scatter: the fine rows are split into two fixed
+// halves, the first summed into y, the second into `scratch` (coarse size), then y += scratch -- on
+// two threads at once, and the same sums in the same order on any thread count (bit for bit).
+template <int d, class Row>
+void restrict_of(const Prolongation<d>& P, const std::uint8_t* mask, Row&& row, double* yc, double* scratch) {
   const Index nc = d * P.cols, half = P.rows / 2;
   if (P.rows < kParallelGrain) {
     std::fill(yc, yc + nc, 0.0);
-    restrict_rows<d>(P, mask, rf, yc, 0, P.rows);
+    restrict_rows_of<d>(P, mask, row, yc, 0, P.rows);
     return;
   }
   parallel_for(2, [&](Index h) {
     double* y = h == 0 ? yc : scratch;
     std::fill(y, y + nc, 0.0);
-    restrict_rows<d>(P, mask, rf, y, h == 0 ? 0 : half, h == 0 ? half : P.rows);
+    restrict_rows_of<d>(P, mask, row, y, h == 0 ? 0 : half, h == 0 ? half : P.rows);
   }, 1);
   parallel_for(nc, [&](Index k) { yc[k] += scratch[k]; });
+}
+
+// y_coarse = P^T diag(mask) r_fine
+template <int d>
+void restrict_residual(const Prolongation<d>& P, const std::uint8_t* mask, const double* rf, double* yc, double* scratch) {
+  restrict_of<d>(P, mask, [&](Index i) { return Vec<d>(CVecMap<d>(rf + d * i)); }, yc, scratch);
+}
+
+// Tests and benchmarks: when cleared, the cycles form every residual of a level as a vector first
+// and restrict that (as before issue 15's fused pass); the two give the same bits.
+inline bool& fused_residual_restriction() {
+  static bool on = true;
+  return on;
+}
+
+// y_coarse = P^T (b - A x) in one pass over A: each row's residual restricted as it is formed
+// (BlockMatrix::residual_row), never stored -- a level's residual pass wrote a vector that the
+// restriction read straight back (32 of the ~290 bytes a row of a 2D coarse level streamed;
+// issue 15). The same rows, sums and order as A.residual then restrict_residual: the same bits.
+template <int d>
+void restrict_level_residual(const BlockMatrix<d>& A, const Prolongation<d>& P, const double* x, const double* b, double* yc,
+                             double* scratch) {
+  const Index ahead = prefetch_value_rows();
+  A.with_values([&](const auto* vals) {
+    restrict_of<d>(P, nullptr, [&](Index i) {
+      Vec<d> s;
+      A.residual_row(vals, x, b, i, ahead, s.data());
+      return s;
+    }, yc, scratch);
+  });
 }
 
 }  // namespace cmg

@@ -74,6 +74,12 @@ class MonotoneMultigridStep {
     mask_ = P.base_mask();
     r_.assign(n, 0.0); old_.assign(n, 0.0);  // of the same size: no new pages
     anderson_.reset();  // a kept workspace: its slots stay, the history of the last solve goes
+    // A kept workspace takes all its Anderson slots before the first cycle of its first solve (the
+    // solver's later solves need them all the same); a step's own workspace (the command line's
+    // single solves) allocates them as the history fills, so a solve that never mixes does not
+    // hold them at its peak.
+    if constexpr (L::coarse_freezes_bound)
+      if (work) anderson_.reserve(n);
     lo_.assign(P.num_contact() * d, -kInf); hi_.assign(P.num_contact() * d, kInf);  // bounds live at contact nodes only
   }
 
@@ -86,7 +92,16 @@ class MonotoneMultigridStep {
     parallel_for((Index)u.size(), [&](Index k) { old_[k] = u[k]; });
     for (int s = 0; s < opt_.nu1; ++s) Smoother::sweep(P_, u.data(), true, order_);
     pc.lap(Phase::PreSmooth);
-    A.residual(u.data(), f.data(), r_.data());
+    // The fine residual r = f - A u: at the contact rows now (the linearization reads them and adds
+    // the friction gradient), every other row where the coarse correction restricts it, formed as
+    // it is restricted (BlockMatrix::residual_row): a residual pass wrote a fine vector that the
+    // restriction read straight back (issue 15). The same sums: the same bits as a residual pass.
+    const Index ahead = prefetch_value_rows();
+    const bool fused = fused_residual_restriction();
+    if (!fused) A.residual(u.data(), f.data(), r_.data());
+    else
+      for (Index c = 0; c < P_.num_contact(); ++c)
+        A.residual_row(A.values.data(), u.data(), f.data(), P_.contact_node(c), ahead, r_.data() + d * P_.contact_node(c));
     const bool bounded = linearize();
     pc.lap(Phase::Linearize);
     const bool state_changed = mask_ != built_.mask;
@@ -96,9 +111,16 @@ class MonotoneMultigridStep {
     pg_.bring(A, mask_.data(), coupling_, !state_changed && !first_);
     first_ = false;
     pc.lap(Phase::CoarseUpdate);
+    const std::uint8_t* flags = P_.row_flags();
+    const auto fine_residual = [&](Index i) {
+      Vec<d> s;
+      if (!fused || (flags[i] & ContactProblem<d>::kContactRow)) s = CVecMap<d>(r_.data() + d * i);
+      else A.residual_row(A.values.data(), u.data(), f.data(), i, ahead, s.data());
+      return s;
+    };
     // u += P~ c: prolongated straight into the iterate (no fine vector for the correction)
-    C_.correction(opt_, r_.data(), mask_.data(), NodeBounds{&P_.contact_nodes(), lo_.data(), hi_.data()}, bounded, u.data(),
-                  P_.num_nodes(), true);
+    C_.correction_of(opt_, fine_residual, mask_.data(), NodeBounds{&P_.contact_nodes(), lo_.data(), hi_.data()}, bounded, u.data(),
+                     P_.num_nodes(), true);
     if (tied_) tied_->apply(P_, opt_, u.data());  // two bodies: the common motions, no bounds
     pc.lap(Phase::CoarseCorrection);
     for (int s = 0; s < opt_.nu2; ++s) Smoother::sweep(P_, u.data(), false, order_, opt_.omega_post);
@@ -137,7 +159,6 @@ class MonotoneMultigridStep {
     }
     // Au += A (u - u_old) and e = |u - u_old|_A^2 in one pass (were four: difference, product,
     // update, dot); sums over fixed chunks of rows, so the same on any thread count
-    const Index ahead = prefetch_value_rows();
     const double e = parallel_sum(A.rows, [&](Index i) {
       A.prefetch_ahead(i, u.data(), old_.data());  // two gathers a block (block_matrix.hpp says why)
       prefetch_row_values<d>(A.values.data(), A.indptr.data(), i, ahead, A.rows);

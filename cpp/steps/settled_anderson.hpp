@@ -43,6 +43,13 @@ class SettledAnderson {
     return s;
   }
   bool last_accelerated() const { return accelerated_; }
+  // Every slot sized for n entries now, their pages touched here and not in the cycles where the
+  // history first fills (a kept workspace's first solve: issue 15, a first touch costs up to ~50 us
+  // a page on this project's VM). Every entry is written before it is read: no bit changes.
+  void reserve(Index n) {
+    slot_.resize(kDepth);
+    for (Slot& q : slot_) { q.x.resize(n); q.g.resize(n); }
+  }
 
   // x: the iterate before the cycle; gx: the cycle's result G(x), overwritten with the mixed
   // iterate when `admit(candidate, plain)` accepts it (it may adjust the candidate; plain is G(x)).
