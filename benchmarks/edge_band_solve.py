@@ -52,6 +52,7 @@ ETA = 0.02
 BAND_TOL = 1e-10
 SWEEPS = 2000
 NEWTON_STEPS = 40
+CONTINUATION = False  # --continuation: a Newton that fails is retried by continuation in F from the iterate
 
 
 def band_nodes(S, x, changed, ring=True):
@@ -215,7 +216,16 @@ def band_step(S, F, x, changed):
     phi0 = float(np.linalg.norm(ac_phi(Kb, bb, g, F, x0)[0]))
     xb, hist = band_newton(Kb, bb, g, F, x0.copy(), tol)
     info.update(phi0=phi0, newton=len(hist) - 1, phi_newton=hist[-1], tol=tol)
-    if hist[-1] > tol:
+    if hist[-1] > tol and CONTINUATION:
+        xc = x0.copy()
+        for Fk in np.geomspace(0.05, 1.0, 40) * F:
+            xc, hk = band_newton(Kb, bb, g, Fk, xc, tol)
+        if hk[-1] <= 1e3 * tol:  # the continuation's end stalls at |phi| ~ 1e-9 of max lam (near-singular)
+            xb, hist = xc, hk
+            info.update(phi_continuation=hk[-1], by="continuation")
+    if info.get("by") == "continuation":
+        pass
+    elif hist[-1] > tol:
         xb, ns = band_sweeps(Kb, bb, g, F, x0)
         info.update(sweeps=ns, phi_sweeps=float(np.linalg.norm(ac_phi(Kb, bb, g, F, xb)[0])))
         info["by"] = "sweeps"
@@ -284,8 +294,10 @@ def cmd_cycles(a, H):
                 b = res["band_steps"]
                 nb = [s["band"] for s in b]
                 bys = [s.get("by") for s in b]
+                res["continuation_steps"] = bys.count("continuation")
                 print(f"| {L} | {F:g} | {mode} | {a.chunk} | {res['cycles']}{'' if res['ok'] else '!'} | {res['last_state_change']} | {res['violation']:.1e} | "
-                      + (f"{int(np.median(nb))} / {max(nb)} | {bys.count('newton')} / {bys.count('sweeps')}" if nb else "- | -")
+                      + (f"{int(np.median(nb))} / {max(nb)} | {bys.count('newton')} / {bys.count('sweeps')}"
+                   + (f" (+{bys.count('continuation')} by continuation)" if CONTINUATION else "") if nb else "- | -")
                       + f" | {res['seconds']:.0f} |", flush=True)
                 rows.append(res)
                 if a.json:
@@ -307,7 +319,7 @@ def cmd_limit(a, H):
     xc_all = np.abs(p.mesh.points[C, 0])
     fixed = S["fixed"]
     free_c = ~(fixed[S["n"]] | fixed[S["t"]])
-    for ring in ("lam+ring", "x 0.0312-0.0336", "x 0.030-0.0345", "x 0.028-0.036"):
+    for ring in ("lam+ring", "x 0.0312-0.0336", "x 0.030-0.0345"):
         band, lmax = band_nodes(S, x, np.zeros(0, int), ring=(ring == "lam+ring"))
         if ring.startswith("x "):
             lo, hi = (float(v) for v in ring[2:].split("-"))
@@ -324,11 +336,33 @@ def cmd_limit(a, H):
         # other starts for Newton: the sweeps' result, and continuation in F from the iterate
         xn2, h2 = band_newton(Kb, bb, g, F, xs.copy(), tol)
         xc, cont = x0.copy(), []
-        for Fk in (0.5, 1, 2, 4, 8, 12, 16, 20, 25, 32, 40):
-            Fk = Fk * F / 40.0
+        for Fk in np.geomspace(0.05, 1.0, 40) * F:
             xc, hk = band_newton(Kb, bb, g, Fk, xc, BAND_TOL * lmax)
             cont.append({"F": Fk, "steps": len(hk) - 1, "phi": hk[-1]})
-        xq, fp = band_fixed_point(Kb, bb, g, F, x0)
+        # the continuation's end, judged on its own: residual, fixed point of the point rule, state
+        phic = float(np.linalg.norm(ac_phi(Kb, bb, g, F, xc)[0]))
+        xcs, _ = band_sweeps(Kb, bb, g, F, xc, sweeps=1)
+        xcs200, _ = band_sweeps(Kb, bb, g, F, xc, sweeps=200)
+        _, lamc, zc = ac_phi(Kb, bb, g, F, xc)
+        actc = lamc > 0
+        stc = actc & (np.abs(zc) <= F * lamc)
+        cont_rec = {"phi": phic, "phi_rel": phic / lmax, "one_sweep_move": float(np.abs(xcs - xc).max() / np.abs(xc).max()),
+                    "sweeps200_move": float(np.abs(xcs200 - xc).max() / np.abs(xc).max()),
+                    "state": {"active": int(actc.sum()), "stick": int(stc.sum()), "slip": int((actc & ~stc).sum())},
+                    "distance_from_iterate": float(np.abs(xc - x0).max() / np.abs(x0).max())}
+        # other solutions? Newton from random starts between the iterate and the continuation's end
+        rng = np.random.default_rng(0)
+        others = []
+        for _ in range(10):
+            w = rng.uniform(0, 1, size=len(g)).repeat(2)
+            xs0 = x0 + w * (xc - x0)
+            xo, ho = band_newton(Kb, bb, g, F, xs0, 1e-9 * lmax)
+            others.append({"phi": ho[-1], "steps": len(ho) - 1,
+                           "distance_to_continuation": float(np.abs(xo - xc).max() / np.abs(xc).max())})
+        print(f"  continuation end: |phi| / max lam {phic / lmax:.1e}, one sweep moves it {cont_rec['one_sweep_move']:.1e}, "
+              f"200 sweeps {cont_rec['sweeps200_move']:.1e}, state {cont_rec['state']}, from the iterate {cont_rec['distance_from_iterate']:.1e}; "
+              "newton from 10 mixed starts: " + ", ".join(f"{o['phi'] / lmax:.0e}@{o['distance_to_continuation']:.0e}" for o in others), flush=True)
+        xq, fp = band_fixed_point(Kb, bb, g, F, x0, outer=20, inner=2000)
         phiq = float(np.linalg.norm(ac_phi(Kb, bb, g, F, xq)[0]))
         found = [v for v, h in ((xb, hist[-1]), (xn2, h2[-1]), (xc, cont[-1]["phi"]), (xq, phiq)) if h <= tol]
         spread = (max(float(np.abs(v - found[0]).max()) for v in found) / max(np.abs(found[0]).max(), 1e-300)
@@ -345,6 +379,7 @@ def cmd_limit(a, H):
                "newton_fixed_point_move": float(np.abs(xf - xb).max() / max(np.abs(xb).max(), 1e-300)),
                "newton_state": {"active": int(act.sum()), "stick": int(stick.sum()), "slip": int((act & ~stick).sum())},
                "move_from_iterate": float(np.abs(xb - x0).max() / max(np.abs(x0).max(), 1e-300)),
+               "continuation_end": cont_rec, "newton_mixed_starts": others,
                "fixed_point_bound_changes": fp, "phi_fixed_point": phiq,
                "newton_from_sweeps": h2, "continuation": cont, "solutions_found": len(found),
                "solutions_spread": spread,
@@ -371,8 +406,11 @@ def main():
     ap.add_argument("--level", type=int, default=11)
     ap.add_argument("--friction", type=float, default=40.0)
     ap.add_argument("--cycles", type=int, default=60)
+    ap.add_argument("--continuation", action="store_true")
     ap.add_argument("--json")
     a = ap.parse_args()
+    global CONTINUATION
+    CONTINUATION = a.continuation
     from cycle_growth import adaptive_hierarchy
     H = adaptive_hierarchy(11)
     (cmd_cycles if a.mode == "cycles" else cmd_limit)(a, H)
