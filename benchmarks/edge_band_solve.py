@@ -205,6 +205,36 @@ def band_fixed_point(Kb, bb, g, F, xb, outer=60, inner=4000):
     return xb, hist
 
 
+def point_gs_radius(Kb, bb, g, F, xb):
+    """Spectral radius of the band's point Gauss-Seidel map (one forward + one backward sweep, as
+    band_sweeps) linearized at xb for xb's state: active normals and sticking tangentials held,
+    a sliding tangential solving its own row r_T - sign F r_n = 0, free nodes both rows of K."""
+    k = len(g)
+    n, t = 2 * np.arange(k) + 1, 2 * np.arange(k)
+    _, lam, z = ac_phi(Kb, bb, g, F, xb)
+    act = lam > 0
+    stick = act & (np.abs(z) <= F * lam)
+    slip = act & ~stick
+    J = Kb.copy()
+    s = np.sign(z[slip])
+    J[t[slip]] = Kb[t[slip]] - (s * F)[:, None] * Kb[n[slip]]
+    keep = np.ones(2 * k, bool)
+    keep[n[act]] = False
+    keep[t[stick]] = False
+    idx = np.nonzero(keep)[0]
+    if len(idx) == 0:
+        return 0.0
+    Jf = J[np.ix_(idx, idx)]
+    blk = idx // 2
+    lower = blk[:, None] >= blk[None, :]
+    upper = blk[:, None] <= blk[None, :]
+    Lo, Up = np.where(lower, Jf, 0.0), np.where(upper, Jf, 0.0)
+    Gf = -np.linalg.solve(Lo, Jf - Lo)
+    Gb = -np.linalg.solve(Up, Jf - Up)
+    return {"forward": float(np.abs(np.linalg.eigvals(Gf)).max()),
+            "forward_backward": float(np.abs(np.linalg.eigvals(Gb @ Gf)).max()), "unknowns": int(len(idx))}
+
+
 def band_step(S, F, x, changed):
     band, lmax = band_nodes(S, x, changed)
     info = {"band": int(len(band))}
@@ -350,6 +380,7 @@ def cmd_limit(a, H):
                     "sweeps200_move": float(np.abs(xcs200 - xc).max() / np.abs(xc).max()),
                     "state": {"active": int(actc.sum()), "stick": int(stc.sum()), "slip": int((actc & ~stc).sum())},
                     "distance_from_iterate": float(np.abs(xc - x0).max() / np.abs(x0).max())}
+        cont_rec["point_gs_radius"] = point_gs_radius(Kb, bb, g, F, xc)
         # other solutions? Newton from random starts between the iterate and the continuation's end
         rng = np.random.default_rng(0)
         others = []
@@ -360,7 +391,7 @@ def cmd_limit(a, H):
             others.append({"phi": ho[-1], "steps": len(ho) - 1,
                            "distance_to_continuation": float(np.abs(xo - xc).max() / np.abs(xc).max())})
         print(f"  continuation end: |phi| / max lam {phic / lmax:.1e}, one sweep moves it {cont_rec['one_sweep_move']:.1e}, "
-              f"200 sweeps {cont_rec['sweeps200_move']:.1e}, state {cont_rec['state']}, from the iterate {cont_rec['distance_from_iterate']:.1e}; "
+              f"200 sweeps {cont_rec['sweeps200_move']:.1e}, linearized point GS radius {cont_rec['point_gs_radius']}, state {cont_rec['state']}, from the iterate {cont_rec['distance_from_iterate']:.1e}; "
               "newton from 10 mixed starts: " + ", ".join(f"{o['phi'] / lmax:.0e}@{o['distance_to_continuation']:.0e}" for o in others), flush=True)
         xq, fp = band_fixed_point(Kb, bb, g, F, x0, outer=20, inner=2000)
         phiq = float(np.linalg.norm(ac_phi(Kb, bb, g, F, xq)[0]))
