@@ -426,9 +426,59 @@ def cmd_limit(a, H):
             json.dump(out, fh, indent=1)
 
 
+def cmd_smoother(a, H):
+    """Sweeps alone against sweeps + the band step, from the default solve's --cycles-th iterate
+    (no coarse correction): is the fine smoother with the band block stable at F = 40?"""
+    global CONTINUATION
+    CONTINUATION = True
+    L, F = a.level, a.friction
+    p = problem(H, L, F)
+    S = hertz_system(p)
+    C = np.asarray(p.contact.nodes)
+    r = p.solve("nmg", tol=1e-11, max_cycles=a.cycles, threads=1)
+    solver = p.core_solver()
+    u_start = np.asarray(r.displacement).copy()
+    out = {"level": L, "F": F, "cycles": int(r.cycles), "arms": []}
+    for arm in ("sweeps", "sweeps+band"):
+        u = u_start.copy()
+        rows = []
+        st_prev = None
+        for blk in range(a.blocks):
+            u = np.asarray(solver.smooth(u, a.block_sweeps, "lexicographic", 1))
+            one = np.asarray(solver.smooth(u, 1, "lexicographic", 1))
+            move = energy_norm(p, one - u)
+            x = S["D"] * u.ravel()
+            rn = (S["b"] - S["K"] @ x)[S["n"]]
+            diag = S["K"].diagonal()
+            lamv = rn + diag[S["n"]] * (x[S["n"]] - S["g"])
+            zt = (S["b"] - S["K"] @ x)[S["t"]] + diag[S["t"]] * x[S["t"]]
+            state = np.where(lamv <= 0, 0, np.where(np.abs(zt) <= F * lamv, 1, 2))
+            changed = np.zeros(0, int) if st_prev is None else np.nonzero(state != st_prev)[0]
+            cmove = float(np.abs((one - u)[C]).max())
+            rec = {"block": blk + 1, "one_sweep_move": move, "contact_max_move": cmove, "changed": int(len(changed)),
+                   "slip": int(np.count_nonzero(state == 2)), "active": int(np.count_nonzero(state > 0))}
+            if arm == "sweeps+band":
+                y, info = band_step(S, F, x, changed)
+                rec["band"] = info["band"]
+                rec["by"] = info.get("by")
+                u = (S["D"] * y).reshape(-1, 2)
+            st_prev = state
+            rows.append(rec)
+            if blk % 10 == 9 or blk == a.blocks - 1:
+                print(f"{arm}: block {blk + 1} ({(blk + 1) * a.block_sweeps} sweeps): one-sweep move {move:.2e} (max on contact nodes {cmove:.1e}), "
+                      f"changed {rec['changed']}, active {rec['active']}, slip {rec['slip']}"
+                      + (f", band {rec['band']} by {rec['by']}" if 'band' in rec else ""), flush=True)
+        out["arms"].append({"arm": arm, "rows": rows})
+    if a.json:
+        with open(a.json, "w") as fh:
+            json.dump(out, fh, indent=1)
+
+
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("mode", choices=["cycles", "limit"])
+    ap.add_argument("mode", choices=["cycles", "limit", "smoother"])
+    ap.add_argument("--blocks", type=int, default=100)
+    ap.add_argument("--block-sweeps", type=int, default=10)
     ap.add_argument("--levels", type=int, nargs="+", default=[7, 9, 11])
     ap.add_argument("--frictions", type=float, nargs="+", default=[0.4, 2.0, 5.0, 8.0, 40.0])
     ap.add_argument("--modes", nargs="+", choices=["off", "on"], default=["off", "on"])
@@ -444,7 +494,7 @@ def main():
     CONTINUATION = a.continuation
     from cycle_growth import adaptive_hierarchy
     H = adaptive_hierarchy(11)
-    (cmd_cycles if a.mode == "cycles" else cmd_limit)(a, H)
+    {"cycles": cmd_cycles, "limit": cmd_limit, "smoother": cmd_smoother}[a.mode](a, H)
 
 
 if __name__ == "__main__":
