@@ -5,6 +5,13 @@ A Python prototype: nothing of it is in the core.
     python benchmarks/edge_band_solve.py cycles [--levels 7 9 11] [--frictions 0.4 2 5 8 40]
         [--modes off on] [--chunk 1] [--json PATH]
     python benchmarks/edge_band_solve.py limit [--level 11] [--friction 40] [--cycles 60] [--json PATH]
+    python benchmarks/edge_band_solve.py smoother [--level 11] [--friction 40] [--cycles 60]
+        [--blocks 300] [--block-sweeps 10] [--json PATH]
+
+Measured 2026-12-03 (branch smooth7; docs/history/adaptive.md, "Issue 11, eighth part"): no cycle
+count better by more than one anywhere (L11 F = 0.4 / 2 / 5 17 / 26 / 44 with and without it), L11
+F = 8 / 40 unconverged either way; at F = 40 the band problem at the orbit iterate is solvable by
+continuation in F only, and its solutions are unstable fixed points of point Gauss-Seidel.
 
 The problem in the Hertz plane obstacle's contact frames (coulomb_newton_diagnosis.hertz_system:
 x = D u, K = D A D, normal dof 2c+1, tangential 2c; r = b - K x, r_n >= 0 compressive, x_n <= g).
@@ -33,7 +40,11 @@ call converges (tol 1e-11, the core's test: the last cycle's correction); the re
 contactmg.checks.contact_conditions.
 `limit`: the F = 40 question. Algorithm 2 (default solve, --cycles cycles) into its limit cycle;
 then the band problem with every other dof frozen at that iterate, solved by the block Newton
-from the iterate, and (for the point rule's answer) by band-only nodal sweeps.
+from the iterate, from the sweeps' result, by continuation in F and by the band's own Algorithm 1,
+and (for the point rule's answer) by band-only nodal sweeps; the linearized point Gauss-Seidel radius
+at the solution found.
+`smoother`: from the same iterate, core sweeps (ContactSolver2D.smooth) in blocks, with or without
+the band step (with continuation) after each block; no coarse correction.
 """
 import argparse
 import json
