@@ -167,7 +167,7 @@ def band_sweeps(Kb, bb, g, F, xb, sweeps=SWEEPS):
     """Forward / backward point sweeps of the band with the core's nodal Coulomb rule (frame (n, t))."""
     xb = xb.copy()
     k = len(g)
-    P = np.array([1, 0])  # local (t, n) -> node frame (n, t): index [n, t] = [2j+1, 2j]
+    # local (t, n) = (2j, 2j+1) -> the node frame (n, t) of the nodal rule: indices [2j+1, 2j]
     scale = max(float(np.abs(xb).max()), 1e-300)
     for s in range(sweeps):
         big = 0.0
@@ -182,7 +182,6 @@ def band_sweeps(Kb, bb, g, F, xb, sweeps=SWEEPS):
             xb[ij] = new
         if big <= 1e-14 * scale:
             return xb, s + 1
-    del P
     return xb, sweeps
 
 
