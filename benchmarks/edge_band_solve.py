@@ -116,13 +116,19 @@ def ac_phi(Kb, bb, g, F, xb):
     return phi, lam, z
 
 
-def newton_target(Kb, bb, g, F, xb):
+def band_state(Kb, bb, g, F, xb):
+    """The band's normal / tangential dof indices and its Alart-Curnier state at xb."""
     k = len(g)
     n, t = 2 * np.arange(k) + 1, 2 * np.arange(k)
     _, lam, z = ac_phi(Kb, bb, g, F, xb)
     act = lam > 0
     stick = act & (np.abs(z) <= F * lam)
-    slip = act & ~stick
+    return n, t, z, act, stick, act & ~stick
+
+
+def newton_target(Kb, bb, g, F, xb):
+    k = len(g)
+    n, t, z, act, stick, slip = band_state(Kb, bb, g, F, xb)
     M = Kb.copy()
     rhs = bb.copy()
     M[n[act]] = 0
@@ -220,11 +226,7 @@ def point_gs_radius(Kb, bb, g, F, xb):
     band_sweeps) linearized at xb for xb's state: active normals and sticking tangentials held,
     a sliding tangential solving its own row r_T - sign F r_n = 0, free nodes both rows of K."""
     k = len(g)
-    n, t = 2 * np.arange(k) + 1, 2 * np.arange(k)
-    _, lam, z = ac_phi(Kb, bb, g, F, xb)
-    act = lam > 0
-    stick = act & (np.abs(z) <= F * lam)
-    slip = act & ~stick
+    n, t, z, act, stick, slip = band_state(Kb, bb, g, F, xb)
     J = Kb.copy()
     s = np.sign(z[slip])
     J[t[slip]] = Kb[t[slip]] - (s * F)[:, None] * Kb[n[slip]]
