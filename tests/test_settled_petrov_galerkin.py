@@ -110,17 +110,17 @@ def tresca_problem(level):
                           contact_tags=[1], obstacle=PlaneObstacle((0.0, 0.0), (0.0, -1.0)), friction=Tresca(30.0))
 
 
-def test_3d_coulomb_same_solution():
-    # the d = 3 template: sliding nodes' Hessian blocks rebuild the levels every cycle, the overlay with them
+def test_3d_refused():
+    # in 3D a second solve with the coupling gave run-to-run different bits and once (stop 24's CI) a
+    # different solution: refused, by the Python problem and by the core solver alike
     h = sphere.sphere_adaptive_hierarchy(3, friction=0.4)
-    for F in (0.1, 0.4):
-        p = sphere.sphere_problem("tetra", 3, F, hierarchy=h)
-        off = p.solve(threads=1)
-        on = p.solve(threads=1, petrov_galerkin=True)
-        assert off.converged and on.converged
-        same_solution(p, off, on)
-        assert on.extra["petrov_galerkin"]["cycles"] > 0
-        assert abs(on.cycles - off.cycles) <= 2
+    p = sphere.sphere_problem("tetra", 3, 0.4, hierarchy=h)
+    with pytest.raises(ValueError, match="petrov_galerkin is for 2D problems only"):
+        p.solve(threads=1, petrov_galerkin=True)
+    off = p.solve(threads=1)
+    assert off.converged and contact_conditions(p, off)["max"] <= 1e-8
+    with pytest.raises(ValueError, match="petrov_galerkin is for 2D problems only"):
+        p.solver.solve(petrov_galerkin=True)
 
 
 @pytest.fixture(scope="module")

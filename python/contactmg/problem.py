@@ -592,6 +592,10 @@ class ContactProblem:
         if not isinstance(petrov_galerkin, (bool, np.bool_)):
             raise ValueError(f"petrov_galerkin must be True or False, got {petrov_galerkin!r}")
         petrov_galerkin = bool(petrov_galerkin)
+        if petrov_galerkin and self.mesh.dim == 3:
+            # a second solve with it on gave run-to-run different bits in 3D, once a different
+            # solution (stop 24's CI): refused until that is understood
+            raise ValueError("petrov_galerkin is for 2D problems only (in 3D it is not yet reliable)")
         if petrov_galerkin and method not in ("nmg", "linear") and asked:
             raise ValueError(f"petrov_galerkin is a choice of method 'nmg' (Algorithm 2), not {method!r}")
         if petrov_galerkin and method == "nmg":
