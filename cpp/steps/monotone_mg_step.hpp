@@ -106,9 +106,10 @@ class MonotoneMultigridStep {
     pc.lap(Phase::Linearize);
     const bool state_changed = mask_ != built_.mask;
     rebuilt = built_.update(H_, A, mask_, hessian_);
-    // settled: the truncation of this solve's cycle before (the first cycle's built one may be a
-    // previous solve's)
-    pg_.bring(A, mask_.data(), coupling_, !state_changed && !first_);
+    // every cycle but the first, for the sliding nodes of this one: waiting until the truncation
+    // settles left the settling cycles at the frozen bound's slow rate (adaptive Hertz level 11,
+    // F = 2: 16 cycles settled only, 13 in every cycle; issue 11, ninth part)
+    pg_.bring(A, mask_.data(), coupling_, !first_);
     first_ = false;
     pc.lap(Phase::CoarseUpdate);
     const std::uint8_t* flags = P_.row_flags();

@@ -50,6 +50,10 @@ SOLVE_TAKES_PETROV_GALERKIN = "petrov_galerkin:" in (_core.ContactSolver2D.solve
 # tetrahedral half ball gains too (level 3: 0.40 -> 0.32, 19 -> 16 cycles). Quadrilaterals gain nothing
 # (0.171 -> 0.157, 0.226 -> 0.225 at 1.4) and hexahedra lose (0.19 -> 0.25): plain Gauss-Seidel there.
 DEFAULT_OMEGA = {"triangle": 1.3, "tetra": 1.3}
+# The post-smoothing's own omega on 2D adaptive hierarchies, where the Petrov-Galerkin coupling is
+# on by default: with it, 1.5 took adaptive Hertz level 11 at F = 0.4 / 1 from 13 / 14 cycles to 12 / 13
+# (level 3: 8 / 9), 1.7 costs level 3 a cycle (issue 11, ninth part).
+DEFAULT_OMEGA_POST_ADAPTIVE = {"triangle": 1.5}
 # Issue 15: a core solver built for the coloured order stores its levels by colours (each colour a
 # contiguous range: the coloured sweep streams memory). The default ordering of a problem's solves,
 # chosen by measurement (docs/scaling.md, benchmarks/parallel_bandwidth.py).
@@ -419,13 +423,31 @@ class ContactProblem:
     # Over-relaxation of the smoothers' unbounded block solves (CycleOptions::omega in the core):
     # None = DEFAULT_OMEGA of the mesh's cell type (1 where it has none); a number in (0, 2) forces it.
     smoother_omega: Optional[float] = None
-    # The post-smoothing sweeps' own over-relaxation (CycleOptions::omega_post; None: the same as
-    # the pre-smoothing's). Off by default (issue 11, fifth part).
+    # The post-smoothing sweeps' own over-relaxation (CycleOptions::omega_post): None = the
+    # pre-smoothing's, except on 2D adaptive hierarchies, where it is DEFAULT_OMEGA_POST_ADAPTIVE of
+    # the cell type (with the coupling below; issue 11, ninth part); a number in (0, 2) forces it.
     smoother_omega_post: Optional[float] = None
-    # Algorithm 2's settled cycles with the sliding nodes' Petrov-Galerkin coupling on the top coarse
-    # level and a fallback to the symmetric one (CycleOptions::settled_petrov_galerkin; the "nmg"
-    # solves of a Coulomb problem). Off by default (issue 11, seventh part).
-    settled_petrov_galerkin: bool = False
+    # Algorithm 2's cycles (all but the first) with the sliding nodes' Petrov-Galerkin coupling on
+    # the top coarse level and a fallback to the symmetric one (CycleOptions::settled_petrov_galerkin;
+    # the "nmg" solves of a Coulomb problem): None = on for 2D adaptive hierarchies (issue 11, ninth
+    # part: the adaptive Table 1 flat for F <= 2), off otherwise (uniform level 7 at F = 5 takes 19
+    # cycles with it, 14 without); True/False force it (True is refused in 3D).
+    settled_petrov_galerkin: Optional[bool] = None
+
+    def _adaptive_2d(self) -> bool:
+        return self.hierarchy.kind == "adaptive" and self.mesh.dim == 2
+
+    def post_smoothing_omega(self) -> Optional[float]:
+        """The post-smoothing sweeps' own over-relaxation (None: the pre-smoothing's)."""
+        w = self.smoother_omega_post
+        if w is None and self.smoother_omega is None and self._adaptive_2d():
+            w = DEFAULT_OMEGA_POST_ADAPTIVE.get(self.mesh.cell_type)
+        return None if w is None else _checked_omega(w, "omega_post")
+
+    def petrov_galerkin_coupling(self) -> bool:
+        """Whether Algorithm 2's solves of this problem couple the sliding nodes on the top coarse level."""
+        on = self.settled_petrov_galerkin
+        return bool(self._adaptive_2d() and isinstance(self.friction, Coulomb)) if on is None else on
 
     def smoothing_omega(self) -> float:
         """The over-relaxation the solves of this problem use (smoother_omega or the default)."""
@@ -534,11 +556,11 @@ class ContactProblem:
         fixed_point_max); result.extra["outer_changes"] holds the change of every outer iteration.
         `omega`: over-relaxation of the unbounded block solves of every sweep (fine nodes without
         contact, coarse rows without bounds), in (0, 2); None: smoothing_omega(). `omega_post`: the
-        same for the post-smoothing sweeps only; None: smoother_omega_post, or omega if that is None.
-        `petrov_galerkin` ("nmg", and "linear"'s reference solve): in Algorithm 2's cycles whose contact
-        state has settled, the top coarse level also carries the sliding nodes' Petrov-Galerkin
-        coupling, switched off for the rest of the solve by a cycle that does not lower the fixed-point
-        residual; None: settled_petrov_galerkin. result.history["petrov_galerkin"]: 1 in the cycles
+        same for the post-smoothing sweeps only; None: post_smoothing_omega() (omega where that is None),
+        or, when `omega` is given, smoother_omega_post or omega.
+        `petrov_galerkin` ("nmg", and "linear"'s reference solve): in Algorithm 2's cycles after the first,
+        the top coarse level also carries the sliding nodes' Petrov-Galerkin coupling, switched off for
+        the rest of the solve by a cycle whose correction is no smaller than every one before; None: petrov_galerkin_coupling(). result.history["petrov_galerkin"]: 1 in the cycles
         with it, 2 in the one that switched it off; result.extra["petrov_galerkin"] when on."""
         if method not in METHODS:
             raise ValueError(f"method must be one of {METHODS}, got {method!r}")
@@ -576,19 +598,20 @@ class ContactProblem:
             if not SOLVE_TAKES_FIXED_POINT_STALL:
                 raise ValueError("fixed_point_stall_window needs a core built with it (issue 11)")
             kw["fixed_point_stall_window"] = int(fixed_point_stall_window)
+        if omega_post is None:  # a pre-smoothing omega given here is the post-smoothing's too
+            omega_post = self.post_smoothing_omega() if omega is None else self.smoother_omega_post
         omega = self.smoothing_omega() if omega is None else _checked_omega(omega)
         if SOLVE_TAKES_OMEGA:
             kw["omega"] = omega
         elif omega != 1.0:
             raise ValueError("omega needs a core with over-relaxed sweeps (issue 11)")
-        omega_post = self.smoother_omega_post if omega_post is None else omega_post
         if omega_post is not None:
             omega_post = _checked_omega(omega_post, "omega_post")
             if not SOLVE_TAKES_OMEGA_POST:
                 raise ValueError("omega_post needs a core built with it (issue 11, fifth part)")
             kw["omega_post"] = omega_post
         asked = petrov_galerkin is not None
-        petrov_galerkin = self.settled_petrov_galerkin if petrov_galerkin is None else petrov_galerkin
+        petrov_galerkin = self.petrov_galerkin_coupling() if petrov_galerkin is None else petrov_galerkin
         if not isinstance(petrov_galerkin, (bool, np.bool_)):
             raise ValueError(f"petrov_galerkin must be True or False, got {petrov_galerkin!r}")
         petrov_galerkin = bool(petrov_galerkin)
