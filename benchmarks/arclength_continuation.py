@@ -403,7 +403,7 @@ def run(S, x0, F0, F_hi, F_lo, max_pieces, deadline, check_every=25, max_rank=20
         # and its inequalities hold on (F_a, F_a + eps) too
         rec["jump"] = float(np.abs(P.xJ(F_a) - x_old).max() / np.abs(x_old).max())
         rec["min_ind_first_eps"] = float(min(P.indicators(F_a + d2 * eps * q).min() for q in np.linspace(0.1, 1, 10)))
-        if rec["jump"] > 1e-8 or rec["min_ind_first_eps"] < -tol:
+        if rec["jump"] > 1e-8 or rec["min_ind_first_eps"] < -10 * tol:  # round-off at ~0.1 eps
             rec["end"] = "the continuation does not join the piece"
             out["pieces"].append(rec)
             print(f"piece {k}: the continuation does not join: jump {rec['jump']:.1e}, "
@@ -518,6 +518,8 @@ def main():
     ap.add_argument("--verify-end", action="store_true", help="at the end point (if it is --to-F): Newton polish, "
                     "contact_conditions, Algorithm 2 started from it")
     ap.add_argument("--verify-cycles", type=int, default=200)
+    ap.add_argument("--compare", nargs="*", default=[], help="saved solutions u (.npy): the end point's distance "
+                    "to each (energy norm, relative) and the number of contact nodes in another state")
     ap.add_argument("--json")
     a = ap.parse_args()
     t0 = time.perf_counter()
@@ -540,6 +542,18 @@ def main():
     if a.save_end:
         np.save(a.save_end, S["D"] * x_end)
         out["saved"] = a.save_end
+    if a.compare:
+        from coulomb_newton_diagnosis import energy_norm
+        st_end = state_of(S, F_end, x_end)
+        out["compare"] = {}
+        for path in a.compare:
+            uc = np.load(path).ravel()
+            xc = S["D"] * uc
+            ue = S["D"] * x_end
+            out["compare"][path] = {"distance": energy_norm(p, ue - uc) / energy_norm(p, uc),
+                                    "nodes_in_other_state": int((state_of(S, F_end, xc) != st_end).sum()),
+                                    "phi_of_saved_at_end_F": float(np.linalg.norm(ac_residual(S, F_end, xc)))}
+            print(f"end point vs {path}: {out['compare'][path]}", flush=True)
     if a.verify_end and abs(F_end - a.to_F) < 1e-12 * a.to_F:
         out["verify_end"] = verify_end(H, S, S["D"] * x_end, a.to_F, a.verify_cycles)
     out["total_seconds"] = time.perf_counter() - t0
