@@ -39,7 +39,15 @@ exactly, piece by piece, with no predictor-corrector:
   capacitance matrix, recorded on both sides of every breakpoint; the full x_S(F) (one solve with A)
   and |phi(x, F)| checked at the start, every --check-every pieces, at folds and at the end.
 
-Measured 2026-12-03 (branch cont1): see docs/history/adaptive.md, "Ninth part".
+Measured 2026-12-03 (branch cont1; docs/history/adaptive.md, "Issue 11, ninth part"): on L11 the branch
+through the F = 20 Newton solution turns back first at F = 20.6397 (a kink: node 394 free -> slip,
+sign det M_S + -> -), zig-zags through 84 turns (all kinks) in F = 17.02-21.14 and then rises to
+F = 40 (151 pieces, 89 s): a solution at F = 40 (489 / 481 / 8 active / stick / slip, |phi| 5.9e-10,
+contact_conditions 6.1e-9) from which Algorithm 2 departs (3.2 % away after 200 cycles). The branch
+from Algorithm 2's F = 0.4 solution is the same one (506 pieces, the same F = 40 solution to 1.3e-10).
+L9 / L10: from F = 20 to 40 with no turn, at Algorithm 2's own F = 40 solution.
+
+    --compare-alg2   at the end point: Algorithm 2 from u = 0 at the end F and its distance
 """
 import argparse
 import json
@@ -532,6 +540,7 @@ def main():
     ap.add_argument("--verify-end", action="store_true", help="at the end point (if it is --to-F): Newton polish, "
                     "contact_conditions, Algorithm 2 started from it")
     ap.add_argument("--verify-cycles", type=int, default=200)
+    ap.add_argument("--compare-alg2", action="store_true")
     ap.add_argument("--compare", nargs="*", default=[], help="saved solutions u (.npy): the end point's distance "
                     "to each (energy norm, relative) and the number of contact nodes in another state")
     ap.add_argument("--json")
@@ -568,6 +577,15 @@ def main():
                                     "nodes_in_other_state": int((state_of(S, F_end, xc) != st_end).sum()),
                                     "phi_of_saved_at_end_F": float(np.linalg.norm(ac_residual(S, F_end, xc)))}
             print(f"end point vs {path}: {out['compare'][path]}", flush=True)
+    if a.compare_alg2:
+        from coulomb_newton_diagnosis import energy_norm
+        pe = hertz_problem_on(H, F_end)
+        re_ = pe.solve("nmg", tol=1e-11, max_cycles=200, threads=1)
+        ua, ue = np.asarray(re_.displacement).ravel(), S["D"] * x_end
+        out["compare_alg2"] = {"F": F_end, "cycles": int(re_.cycles), "converged": bool(re_.converged),
+                               "distance": energy_norm(pe, ue - ua) / energy_norm(pe, ua),
+                               "nodes_in_other_state": int((state_of(S, F_end, S["D"] * ua) != state_of(S, F_end, x_end)).sum())}
+        print(f"end point vs Algorithm 2 at F = {F_end:g}: {out['compare_alg2']}", flush=True)
     if a.verify_end and abs(F_end - a.to_F) < 1e-12 * a.to_F:
         out["verify_end"] = verify_end(H, S, S["D"] * x_end, a.to_F, a.verify_cycles)
     out["total_seconds"] = time.perf_counter() - t0
