@@ -7,6 +7,18 @@ Newton solution on level 11 turn back (a limit point in F) or reach F = 40?
         [--save-end PATH.npy] [--json PATH]
     python benchmarks/arclength_continuation.py --level 9 --from-F 20      # start: Algorithm 2 at F
 
+The runs of the ninth part (one thread):
+    python benchmarks/arclength_continuation.py --level 9 --verify-end --json benchmarks/results/arclength_continuation_L9_F20_up_cont1.json
+    python benchmarks/arclength_continuation.py --level 10 --verify-end --json benchmarks/results/arclength_continuation_L10_F20_up_cont1.json
+    python benchmarks/arclength_continuation.py --level 11 --max-pieces 20000 --deadline-seconds 2400 --verify-end \
+        --save-end out/cache/ac_L11_F40.npy --json benchmarks/results/arclength_continuation_L11_F20_up_cont1.json
+    python benchmarks/arclength_continuation.py --level 11 --min-F 0.4 --down --max-pieces 20000 --check-every 50 \
+        --compare-alg2 --json benchmarks/results/arclength_continuation_L11_F20_down_cont1.json
+    python benchmarks/arclength_continuation.py --level 11 --start "" --from-F 0.4 --max-pieces 20000 --check-every 50 \
+        --compare out/cache/ac_L11_F40.npy out/cache/nw_F20.npy --json benchmarks/results/arclength_continuation_L11_F04_up_cont1.json
+    python benchmarks/coulomb_newton_diagnosis.py rate --level 11 --friction 40 --start out/cache/ac_L11_F40.npy --steps 30 \
+        --json benchmarks/results/arclength_continuation_L11_F40_rate_cont1.json
+
 The problem in the Hertz plane obstacle's contact frames (coulomb_newton_diagnosis.hertz_system:
 x = D u, r = b - K x, normal dof 2c+1, tangential 2c) and its Alart-Curnier residual phi(x, F)
 (coulomb_newton_diagnosis.ac_residual). phi is piecewise smooth: on a fixed state of the contact
