@@ -1,5 +1,5 @@
 """Algorithm 2's cycles with the sliding nodes' Petrov-Galerkin coupling on level L-1 (issue 11,
-seventh and ninth parts): CycleOptions::settled_petrov_galerkin, solve(petrov_galerkin=True),
+seventh and tenth parts): CycleOptions::settled_petrov_galerkin, solve(petrov_galerkin=True),
 ContactProblem.settled_petrov_galerkin. On by default for Coulomb friction on 2D adaptive
 hierarchies (with the post-smoothing's own omega, DEFAULT_OMEGA_POST_ADAPTIVE), off on uniform
 ones and in 3D. With it on the solve reaches the same solution and passes the independent check,

@@ -108,7 +108,7 @@ class MonotoneMultigridStep {
     rebuilt = built_.update(H_, A, mask_, hessian_);
     // every cycle but the first, for the sliding nodes of this one: waiting until the truncation
     // settles left the settling cycles at the frozen bound's slow rate (adaptive Hertz level 11,
-    // F = 2: 16 cycles settled only, 13 in every cycle; issue 11, ninth part)
+    // F = 2: 16 cycles settled only, 13 in every cycle; issue 11, tenth part)
     pg_.bring(A, mask_.data(), coupling_, !first_);
     first_ = false;
     pc.lap(Phase::CoarseUpdate);

@@ -52,7 +52,7 @@ SOLVE_TAKES_PETROV_GALERKIN = "petrov_galerkin:" in (_core.ContactSolver2D.solve
 DEFAULT_OMEGA = {"triangle": 1.3, "tetra": 1.3}
 # The post-smoothing's own omega on 2D adaptive hierarchies, where the Petrov-Galerkin coupling is
 # on by default: with it, 1.5 took adaptive Hertz level 11 at F = 0.4 / 1 from 13 / 14 cycles to 12 / 13
-# (level 3: 8 / 9), 1.7 costs level 3 a cycle (issue 11, ninth part).
+# (level 3: 8 / 9), 1.7 costs level 3 a cycle (issue 11, tenth part).
 DEFAULT_OMEGA_POST_ADAPTIVE = {"triangle": 1.5}
 # Issue 15: a core solver built for the coloured order stores its levels by colours (each colour a
 # contiguous range: the coloured sweep streams memory). The default ordering of a problem's solves,
@@ -425,11 +425,11 @@ class ContactProblem:
     smoother_omega: Optional[float] = None
     # The post-smoothing sweeps' own over-relaxation (CycleOptions::omega_post): None = the
     # pre-smoothing's, except on 2D adaptive hierarchies, where it is DEFAULT_OMEGA_POST_ADAPTIVE of
-    # the cell type (with the coupling below; issue 11, ninth part); a number in (0, 2) forces it.
+    # the cell type (with the coupling below; issue 11, tenth part); a number in (0, 2) forces it.
     smoother_omega_post: Optional[float] = None
     # Algorithm 2's cycles (all but the first) with the sliding nodes' Petrov-Galerkin coupling on
     # the top coarse level and a fallback to the symmetric one (CycleOptions::settled_petrov_galerkin;
-    # the "nmg" solves of a Coulomb problem): None = on for 2D adaptive hierarchies (issue 11, ninth
+    # the "nmg" solves of a Coulomb problem): None = on for 2D adaptive hierarchies (issue 11, tenth
     # part: the adaptive Table 1 flat for F <= 2), off otherwise (uniform level 7 at F = 5 takes 19
     # cycles with it, 14 without); True/False force it (True is refused in 3D).
     settled_petrov_galerkin: Optional[bool] = None
