@@ -106,8 +106,8 @@ class MonotoneMultigridStep {
     pc.lap(Phase::Linearize);
     const bool state_changed = mask_ != built_.mask;
     rebuilt = built_.update(H_, A, mask_, hessian_);
-    // settled: the truncation of this solve's cycle before (the first cycle's built one may be a
-    // previous solve's)
+    // settled: the truncation of this solve's cycle before (the first cycle's built one is the
+    // base mask a solve starts from, no cycle's)
     pg_.bring(A, mask_.data(), coupling_, !state_changed && !first_);
     first_ = false;
     pc.lap(Phase::CoarseUpdate);
