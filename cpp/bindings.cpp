@@ -308,9 +308,6 @@ void bind_dim(py::module_& m) {
                co.settled_petrov_galerkin = petrov_galerkin.cast<bool>();
                if (co.settled_petrov_galerkin && (tnnmg || fixed_point))
                  throw InputError("petrov_galerkin is a choice of the monotone multigrid cycle (not tnnmg or fixed_point)");
-               // 3D: a second solve with it on gave run-to-run different bits, once a different solution
-               // (stop 24's CI); refused until that is understood
-               if (co.settled_petrov_galerkin && d == 3) throw InputError("petrov_galerkin is for 2D problems only (in 3D it is not yet reliable)");
              }
              check_smoothing_steps(co.nu1, co.nu2);
              check_omega(co.omega);
