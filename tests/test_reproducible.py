@@ -17,7 +17,7 @@ import sys
 import numpy as np
 import pytest
 
-from contactmg import sphere
+from contactmg import _core, sphere
 from contactmg.checks import contact_conditions
 from contactmg.hertz import hertz_problem
 from contactmg.problem import SOLVE_TAKES_PETROV_GALERKIN
@@ -101,3 +101,25 @@ def test_separate_processes_give_the_same_hashes():
     assert runs[0] == runs[1] == runs[2]
     a = runs[0]
     assert a[0] == a[1] == a[3]  # every default solve the first one's bits, before and after the coupling's
+
+
+@pytest.mark.skipif(not hasattr(_core, "_coarsest_update_solve"), reason="core without the coarsest solver's test hook")
+def test_coarsest_low_rank_update_takes_the_changed_columns():
+    # S - S0 with an entry (5, 9) whose row 9 is unchanged (Galerkin matrices are symmetric to
+    # round-off only): the correction's rows must include 9, else M(pos[5], pos[9] = -1) is written
+    # outside its storage and the correction misses the entry (the solve then fell back to a new
+    # factorization of the lower triangle, which does not hold it either)
+    n = 400
+    old = _core.coarsest_max_rank()
+    _core.set_coarsest_max_rank(96)  # the default: 400 rows allow a low-rank correction
+    try:
+        S0 = 4 * np.eye(n) - np.eye(n, k=1) - np.eye(n, k=-1)
+        S = S0.copy()
+        S[5, 9] += 1e-3
+        S[20, 20] += 0.5
+        b = np.linspace(1.0, 2.0, n)
+        x, rank, factorizations = _core._coarsest_update_solve(S0, S, b)
+    finally:
+        _core.set_coarsest_max_rank(old)
+    assert rank == 3 and factorizations == 1
+    assert np.abs(S @ x - b).max() <= 1e-13 * np.abs(b).max()
