@@ -308,9 +308,6 @@ void bind_dim(py::module_& m) {
                co.settled_petrov_galerkin = petrov_galerkin.cast<bool>();
                if (co.settled_petrov_galerkin && (tnnmg || fixed_point))
                  throw InputError("petrov_galerkin is a choice of the monotone multigrid cycle (not tnnmg or fixed_point)");
-               // 3D: a second solve with it on gave run-to-run different bits, once a different solution
-               // (stop 24's CI); refused until that is understood
-               if (co.settled_petrov_galerkin && d == 3) throw InputError("petrov_galerkin is for 2D problems only (in 3D it is not yet reliable)");
              }
              check_smoothing_steps(co.nu1, co.nu2);
              check_omega(co.omega);
@@ -580,6 +577,33 @@ PYBIND11_MODULE(_core, m) {
   });
   m.def("coarsest_factorizations", [] { return CoarsestSolver::factorizations_total(); },
         "factorizations of a coarsest-level matrix in this process so far");
+  // Tests: the coarsest solver on its own -- S0 factorized, then S as an update (a low-rank
+  // correction where it allows one), then a solve with b. Returns (x, rank of the correction,
+  // factorizations of this solver). Dense n x n arrays in, their nonzero entries taken.
+  m.def("_coarsest_update_solve", [](DArr S0, DArr S, DArr b) {
+    const Index n = b.size();
+    require_shape(S0, "S0", {(py::ssize_t)n, (py::ssize_t)n}); require_shape(S, "S", {(py::ssize_t)n, (py::ssize_t)n});
+    const auto sparse = [n](const DArr& A) {
+      std::vector<Eigen::Triplet<double>> t;
+      for (Index i = 0; i < n; ++i)
+        for (Index j = 0; j < n; ++j)
+          if (A.data()[i * n + j] != 0) t.emplace_back(i, j, A.data()[i * n + j]);
+      Eigen::SparseMatrix<double> M(n, n);
+      M.setFromTriplets(t.begin(), t.end());
+      return M;
+    };
+    const auto factor = [](Eigen::SparseMatrix<double>& M, Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>& f) {
+      f.compute(M);
+      if (f.info() != Eigen::Success) throw InputError("S0 or S is not positive definite");
+      return 1;
+    };
+    CoarsestSolver C;
+    C.set(sparse(S0), false, factor);
+    C.set(sparse(S), true, factor);
+    std::vector<double> x(n);
+    C.solve(b.data(), x.data(), factor);
+    return py::make_tuple(moved_to_numpy(std::move(x), {(py::ssize_t)n}), (Index)C.rank(), C.factorizations());
+  });
   m.def("stream_triad", [](Index n, int repeats, int threads) {
     if (n < 1 || repeats < 1) throw InputError("stream_triad needs n >= 1 and repeats >= 1");
     py::gil_scoped_release release;

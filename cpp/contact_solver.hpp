@@ -174,7 +174,7 @@ class ContactSolver {
   // map (the nodal rules keep every local solution), so it serves as an independent check.
   std::vector<double> smooth(const double* u0, int sweeps, Ordering ordering = Ordering::Lexicographic) {
     return with_law(law_, [&](auto L) {
-      start(u0);
+      start(u0, false);  // the fine level alone: the coarse levels stay as they are
       P_.set_bounds_to_coefficients();
       P_.set_smoothing_omega(1.0);  // the independent check is the plain nonlinear sweep
       const SweepOrder& order = fine_order(ordering);
@@ -323,7 +323,21 @@ class ContactSolver {
     return B;
   }
 
-  void start(const double* u0) {
+  // A solve starts from the coarse levels as the solver built them (the Galerkin products of the
+  // base mask): rebuilt in full when a solve before left them for another linearization or changed
+  // them incrementally. Without this a second solve began from the last one's truncation and
+  // round-off (incremental updates round otherwise than a rebuild, the coarsest solver's low-rank
+  // state) and gave other bits than the first; now solve() is a function of the problem and its
+  // options. Cost: one full rebuild of the coarse levels in each later solve, counted in its
+  // rebuilds and rebuild seconds (the first cycle's update from the base is a solve's own anyway).
+  void restore_coarse() {
+    if (built_.mask == P_.base_mask() && built_.hessian.empty() && H_.incremental_updates() == 0 && !H_.has_top_overlay()) return;
+    built_.mask = P_.base_mask();
+    built_.hessian.clear();
+    H_.rebuild(P_.matrix(), built_.mask.data());
+  }
+
+  void start(const double* u0, bool coarse = true) {
     H_.sync_float_values();  // the coarse float copies as float_coarse_values() says now
     std::vector<double> u_stored;
     if (u0 && !order_.back().identity()) {
@@ -333,6 +347,7 @@ class ContactSolver {
     rebuilds0_ = H_.rebuilds();
     rebuild_seconds0_ = H_.rebuild_seconds();
     mon_.start();
+    if (coarse) restore_coarse();
     it_.start(P_, u0);
   }
 

@@ -108,11 +108,18 @@ class CoarsestSolver {
     // coarsest levels: 56 dofs): those keep the plain factorization, and their bits
     if (max_rank() == 0 || S_.rows() != S0_.rows() || S_.rows() < 4 * max_rank()) return false;
     const SpMat D = S_ - S0_;
+    // K: the rows and the columns of D's entries. The Galerkin products and their incremental
+    // updates round the two triangles differently (S is symmetric only to round-off), so D may
+    // have an entry (r, c) in a column c whose row is zero; with K the rows alone, M_(pos[r], -1)
+    // wrote before M_'s storage: heap corruption, whose effect depended on the addresses (run-to-run
+    // different second solves on the 3D sphere, now and then a crash).
     std::vector<Index> rows;
     std::vector<char> in(S_.rows(), 0);
     for (Index j = 0; j < D.outerSize(); ++j)
       for (SpMat::InnerIterator it(D, j); it; ++it)
-        if (it.value() != 0 && !in[it.row()]) { in[it.row()] = 1; rows.push_back(it.row()); }
+        if (it.value() != 0)
+          for (const Index r : {(Index)it.row(), (Index)it.col()})
+            if (!in[r]) { in[r] = 1; rows.push_back(r); }
     if ((Index)rows.size() > max_rank()) return false;
     std::sort(rows.begin(), rows.end());
     K_ = rows;

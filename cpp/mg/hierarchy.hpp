@@ -75,6 +75,9 @@ class GalerkinHierarchy {
   }
   int coarsest_factorizations() const { return coarsest_.factorizations(); }
   int rebuilds() const { return rebuilds_; }
+  // incremental updates since the last full rebuild (0: the levels are the Galerkin products of
+  // the mask and Hessian they were built for, bit for bit)
+  int incremental_updates() const { return incremental_; }
   double rebuild_seconds() const { return rebuild_seconds_; }
   std::size_t memory_bytes() const {
     std::size_t s = 0;

@@ -431,7 +431,7 @@ class ContactProblem:
     # the top coarse level and a fallback to the symmetric one (CycleOptions::settled_petrov_galerkin;
     # the "nmg" solves of a Coulomb problem): None = on for 2D adaptive hierarchies (issue 11, tenth
     # part: the adaptive Table 1 flat for F <= 2), off otherwise (uniform level 7 at F = 5 takes 19
-    # cycles with it, 14 without); True/False force it (True is refused in 3D).
+    # cycles with it, 14 without; in 3D it saves at most a cycle); True/False force it.
     settled_petrov_galerkin: Optional[bool] = None
 
     def _adaptive_2d(self) -> bool:
@@ -549,7 +549,9 @@ class ContactProblem:
         reports cycles (SOLVE_TAKES_CYCLE_OPTIONS); an exception it raises stops the solve. With an
         older core, which runs all cycles in one call, asking for it is an error. `threads`: the
         threads of the sweeps, products and norms (0: all cores); the result is the same bit for
-        bit on any count. `ordering` of every Gauss-Seidel sweep: "coloured" (colours of the block
+        bit on any count, and in every solve of the problem with the same arguments (each starts
+        from the coarse levels as the core solver built them: a later solve pays one full coarse
+        rebuild, counted in its rebuilds). `ordering` of every Gauss-Seidel sweep: "coloured" (colours of the block
         graph, the rows of one colour at once; the levels stored by colours) or "lexicographic" (one
         thread for the sweeps); None: `default_ordering` (DEFAULT_ORDERING). `fixed_point_stall_window` (Algorithm 1): stop as not converging once the relative
         change of s_n has not fallen below the one that many outer iterations before (0: run to
@@ -615,10 +617,6 @@ class ContactProblem:
         if not isinstance(petrov_galerkin, (bool, np.bool_)):
             raise ValueError(f"petrov_galerkin must be True or False, got {petrov_galerkin!r}")
         petrov_galerkin = bool(petrov_galerkin)
-        if petrov_galerkin and self.mesh.dim == 3:
-            # a second solve with it on gave run-to-run different bits in 3D, once a different
-            # solution (stop 24's CI): refused until that is understood
-            raise ValueError("petrov_galerkin is for 2D problems only (in 3D it is not yet reliable)")
         if petrov_galerkin and method not in ("nmg", "linear") and asked:
             raise ValueError(f"petrov_galerkin is a choice of method 'nmg' (Algorithm 2), not {method!r}")
         if petrov_galerkin and method == "nmg":
