@@ -305,8 +305,8 @@ void bind_dim(py::module_& m) {
              }
              if (!petrov_galerkin.is_none()) {
                if (!py::isinstance<py::bool_>(petrov_galerkin)) throw InputError("petrov_galerkin must be True or False");
-               co.settled_petrov_galerkin = petrov_galerkin.cast<bool>();
-               if (co.settled_petrov_galerkin && (tnnmg || fixed_point))
+               co.petrov_galerkin = petrov_galerkin.cast<bool>();
+               if (co.petrov_galerkin && (tnnmg || fixed_point))
                  throw InputError("petrov_galerkin is a choice of the monotone multigrid cycle (not tnnmg or fixed_point)");
              }
              check_smoothing_steps(co.nu1, co.nu2);
@@ -352,7 +352,7 @@ void bind_dim(py::module_& m) {
              out["ordering"] = ordering_name(co.ordering);
              out["omega"] = co.omega;
              if (co.omega_post > 0) out["omega_post"] = co.omega_post;
-             if (co.settled_petrov_galerkin) out["petrov_galerkin"] = true;
+             if (co.petrov_galerkin) out["petrov_galerkin"] = true;
              if (tnnmg) { out["linear_correction"] = linear_correction_name(co.linear); out["lines"] = co.lines; }
              out["threads"] = threads == 0 ? max_threads() : (have_openmp() ? threads : 1);
              return out;

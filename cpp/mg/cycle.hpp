@@ -62,11 +62,12 @@ struct CycleOptions {
   // level 7 where the symmetric 1.3 gives 0.26, at the same cost (benchmarks/p1_smoother_modes.py).
   // Each step keeps its energy decrease for any 0 < omega_post < 2, so the cycles stay monotone.
   double omega_post = 0.0;
-  // Algorithm 2 (a law whose coarse problem freezes a bound): in cycles whose contact state has
-  // settled, level L-1's matrix also carries the sliding nodes' Petrov-Galerkin coupling, with a
-  // fallback to the symmetric one (steps/settled_petrov_galerkin.hpp; issue 11, seventh part). Off by
-  // default: that coarse correction is not an energy descent.
-  bool settled_petrov_galerkin = false;
+  // Algorithm 2 (a law whose coarse problem freezes a bound): in every cycle but the first, level
+  // L-1's matrix also carries the sliding nodes' Petrov-Galerkin coupling, with a fallback to the
+  // symmetric one (steps/petrov_galerkin_coupling.hpp; issue 11, seventh and tenth parts). Off here:
+  // that coarse correction is not an energy descent; the Python problem turns it on where it pays
+  // (2D adaptive hierarchies).
+  bool petrov_galerkin = false;
   double post_omega() const { return omega_post > 0 ? omega_post : omega; }
 };
 

@@ -87,7 +87,7 @@ class GalerkinHierarchy {
   }
 
   // A term added to the top coarse level's matrix alone and not restricted to the levels below (the
-  // Petrov-Galerkin coupling of steps/settled_petrov_galerkin.hpp): blocks (I, J, M) of that level.
+  // Petrov-Galerkin coupling of steps/petrov_galerkin_coupling.hpp): blocks (I, J, M) of that level.
   // The rows it touches get the inverse of their new, non-symmetric diagonal block; their sweeps
   // read rows only, so nothing else changes. Refused (false, nothing changed) where a block lies
   // outside the Galerkin pattern, a touched diagonal block is singular or a touched diagonal entry

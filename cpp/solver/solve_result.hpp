@@ -32,7 +32,7 @@ struct CycleRecord {
   double step_size = std::numeric_limits<double>::quiet_NaN();
   double frozen_decrease = std::numeric_limits<double>::quiet_NaN();
   int linear_iterations = 0;  // TNNMG: preconditioner applications (linear cycles) of the correction
-  // Algorithm 2 with CycleOptions::settled_petrov_galerkin: 1 where the top coarse level carried the
+  // Algorithm 2 with CycleOptions::petrov_galerkin: 1 where the top coarse level carried the
   // sliding nodes' coupling, 2 where it did and the fallback then switched it off, else 0
   int petrov_galerkin = 0;
 };

@@ -10,7 +10,7 @@
 #include "steps/nonlinear_gauss_seidel.hpp"
 #include "steps/tied_correction.hpp"
 #include "steps/settled_anderson.hpp"
-#include "steps/settled_petrov_galerkin.hpp"
+#include "steps/petrov_galerkin_coupling.hpp"
 
 namespace cmg {
 
@@ -69,7 +69,7 @@ class MonotoneMultigridStep {
                         FineIterate<d>& it, const CycleOptions& opt, const SweepOrder& fine_order = SweepOrder(),
                         TiedCorrection<d>* tied = nullptr, CycleWorkspace* work = nullptr)
       : P_(P), H_(H), C_(C), built_(built), it_(it), opt_(opt), order_(fine_order), tied_(tied), ws_(work ? *work : own_),
-        r_(ws_.r), old_(ws_.old), anderson_(ws_.anderson), pg_(H, opt.settled_petrov_galerkin && L::coarse_freezes_bound) {
+        r_(ws_.r), old_(ws_.old), anderson_(ws_.anderson), pg_(H, opt.petrov_galerkin && L::coarse_freezes_bound) {
     const Index n = P.num_nodes() * d;
     mask_ = P.base_mask();
     r_.assign(n, 0.0); old_.assign(n, 0.0);  // of the same size: no new pages
@@ -314,7 +314,7 @@ class MonotoneMultigridStep {
   std::vector<double> lo_, hi_;  // nc * d
   std::vector<std::pair<Index, Mat<d>>> hessian_;
   SettledAnderson& anderson_;
-  SettledPetrovGalerkin<d> pg_;  // declared after H_: clears its overlay of H_ first
+  PetrovGalerkinCoupling<d> pg_;  // declared after H_: clears its overlay of H_ first
   std::vector<std::pair<Index, Vec<d>>> coupling_;  // sliding node -> w (bound_coupling), when wanted
   bool first_ = true;
   double best_step_ = kInf;  // the smallest |u^{k+1} - u^k|_A of this solve

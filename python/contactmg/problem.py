@@ -39,7 +39,7 @@ LINEAR_CORRECTIONS = ("pcg", "cycle", "coarse")
 SOLVE_TAKES_OMEGA = "omega:" in (_core.ContactSolver2D.solve.__doc__ or "")
 # Issue 11, fifth part: a separate over-relaxation of the post-smoothing sweeps (off by default)
 SOLVE_TAKES_OMEGA_POST = "omega_post:" in (_core.ContactSolver2D.solve.__doc__ or "")
-# Issue 11, seventh part: the sliding nodes' Petrov-Galerkin coupling on level L-1 in settled cycles (off by default)
+# Issue 11, seventh and tenth parts: the sliding nodes' Petrov-Galerkin coupling on level L-1 (solve(petrov_galerkin=...))
 SOLVE_TAKES_PETROV_GALERKIN = "petrov_galerkin:" in (_core.ContactSolver2D.solve.__doc__ or "")
 # The default omega by cell type. Simplices: 1.3 (symmetric SOR). Nodal block Gauss-Seidel on P1
 # elasticity levels off near 0.34 per F(3,3) cycle on the adaptive Hertz levels (Q1: 0.14 on the
@@ -428,11 +428,11 @@ class ContactProblem:
     # the cell type (with the coupling below; issue 11, tenth part); a number in (0, 2) forces it.
     smoother_omega_post: Optional[float] = None
     # Algorithm 2's cycles (all but the first) with the sliding nodes' Petrov-Galerkin coupling on
-    # the top coarse level and a fallback to the symmetric one (CycleOptions::settled_petrov_galerkin;
+    # the top coarse level and a fallback to the symmetric one (CycleOptions::petrov_galerkin;
     # the "nmg" solves of a Coulomb problem): None = on for 2D adaptive hierarchies (issue 11, tenth
     # part: the adaptive Table 1 flat for F <= 2), off otherwise (uniform level 7 at F = 5 takes 19
     # cycles with it, 14 without; in 3D it saves at most a cycle); True/False force it.
-    settled_petrov_galerkin: Optional[bool] = None
+    petrov_galerkin: Optional[bool] = None
 
     def _adaptive_2d(self) -> bool:
         return self.hierarchy.kind == "adaptive" and self.mesh.dim == 2
@@ -446,7 +446,7 @@ class ContactProblem:
 
     def petrov_galerkin_coupling(self) -> bool:
         """Whether Algorithm 2's solves of this problem couple the sliding nodes on the top coarse level."""
-        on = self.settled_petrov_galerkin
+        on = self.petrov_galerkin
         return bool(self._adaptive_2d() and isinstance(self.friction, Coulomb)) if on is None else on
 
     def smoothing_omega(self) -> float:

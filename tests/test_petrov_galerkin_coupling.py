@@ -1,6 +1,6 @@
 """Algorithm 2's cycles with the sliding nodes' Petrov-Galerkin coupling on level L-1 (issue 11,
-seventh and tenth parts): CycleOptions::settled_petrov_galerkin, solve(petrov_galerkin=True),
-ContactProblem.settled_petrov_galerkin. On by default for Coulomb friction on 2D adaptive
+seventh and tenth parts): CycleOptions::petrov_galerkin, solve(petrov_galerkin=True),
+ContactProblem.petrov_galerkin. On by default for Coulomb friction on 2D adaptive
 hierarchies (with the post-smoothing's own omega, DEFAULT_OMEGA_POST_ADAPTIVE), off on uniform
 ones and in 3D. With it on the solve reaches the same solution and passes the independent check,
 the coupling is really used (in every cycle but the first), the top coarse level is symmetric
@@ -32,7 +32,7 @@ def same_solution(p, a, b, rtol=1e-8):
 
 def test_default_by_hierarchy_and_bad_values(adaptive7):
     p = hertz_problem("triangle", 3, 0.4)
-    assert p.settled_petrov_galerkin is None and not p.petrov_galerkin_coupling()  # uniform: off
+    assert p.petrov_galerkin is None and not p.petrov_galerkin_coupling()  # uniform: off
     assert p.post_smoothing_omega() is None
     r = p.solve()
     assert "petrov_galerkin" not in r.extra
@@ -106,7 +106,7 @@ def test_orderings_and_threads_agree(ordering):
 
 def test_problem_default_and_linear_reference():
     p = hertz_problem("triangle", 5, 2.0, coulomb_at_zero=True)
-    p.settled_petrov_galerkin = True  # forced on a uniform hierarchy
+    p.petrov_galerkin = True  # forced on a uniform hierarchy
     r = p.solve(threads=1)
     assert r.extra["petrov_galerkin"]["cycles"] > 0
     assert p.solve(threads=1, petrov_galerkin=False).extra.get("petrov_galerkin") is None
