@@ -46,6 +46,19 @@ def test_one_step_path_is_the_single_solve(problem):
         assert np.array_equal(r.contact_force, ref.contact_force)
 
 
+def test_one_step_path_on_an_adaptive_hierarchy_takes_the_problem_defaults():
+    """There the single solve over-relaxes its post-smoothing and couples the sliding nodes
+    (issue 11, tenth part): the path's steps make the same choices, so one step is that solve."""
+    from contactmg.hertz import hertz_adaptive_hierarchy
+
+    p = hertz_problem("triangle", 6, 2.0, coulomb_at_zero=True, hierarchy=hertz_adaptive_hierarchy(6, 0.4))
+    assert p.petrov_galerkin_coupling() and p.post_smoothing_omega() is not None
+    ref = p.solve(tol=1e-11)
+    assert ref.extra["petrov_galerkin"]["cycles"] > 0
+    r = LoadPath.proportional(p, 1).solve(tol=1e-11).last
+    assert np.array_equal(r.displacement, ref.displacement) and r.cycles == ref.cycles
+
+
 def test_zero_slip_origin_changes_nothing(problem):
     """A slip origin of zero is the reference configuration: the same iterates to the last bit
     (fresh core solvers each: a core's coarse matrices carry over between solves, round-off too)."""

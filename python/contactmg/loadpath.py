@@ -20,7 +20,7 @@ from typing import Callable, List, Optional, Sequence
 
 import numpy as np
 
-from .problem import INT32_MAX, METHODS, SOLVE_TAKES_CYCLE_OPTIONS, SOLVE_TAKES_OMEGA, ContactProblem, Dirichlet, \
+from .problem import INT32_MAX, METHODS, SOLVE_TAKES_CYCLE_OPTIONS, SOLVE_TAKES_OMEGA, SOLVE_TAKES_OMEGA_POST, SOLVE_TAKES_PETROV_GALERKIN, ContactProblem, Dirichlet, \
     assemble_load, dirichlet_arrays
 from .results import SLIP, STICK, ContactResult
 
@@ -145,6 +145,11 @@ class LoadPath:
             kw.update(cycle=options.cycle, nu1=options.nu1, nu2=options.nu2)
         if SOLVE_TAKES_OMEGA:
             kw["omega"] = p.smoothing_omega()
+        # the problem's own choices, as in its single solves (a one-step path is one solve, bit for bit)
+        if SOLVE_TAKES_OMEGA_POST and p.post_smoothing_omega() is not None:
+            kw["omega_post"] = p.post_smoothing_omega()
+        if SOLVE_TAKES_PETROV_GALERKIN and method == "nmg" and p.petrov_galerkin_coupling():
+            kw["petrov_galerkin"] = True
         t_path = time.perf_counter()
         steps: List[ContactResult] = []
         previous = self.initial
@@ -152,6 +157,7 @@ class LoadPath:
             data = self.step_data(k)
             t0 = time.perf_counter()
             core = p._new_core_solver(p.law, options, load=data.load, fixed_values=data.fixed_values)
+            p._apply_local_smoothing(core)  # as the problem's own solver (adaptive hierarchies)
             if previous is not None:
                 core.set_slip_origin(previous)
             build = time.perf_counter() - t0
