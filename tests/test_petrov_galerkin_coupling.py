@@ -63,6 +63,13 @@ def test_default_by_hierarchy_and_bad_values(adaptive7):
     with pytest.raises(ValueError, match="petrov_galerkin must be True or False"):
         p.solver.solve(petrov_galerkin=1)  # the core refuses what is not a bool
     p.solve("tnnmg", petrov_galerkin=False)  # off is every method's
+    from contactmg.loadpath import LoadPath
+    p.petrov_galerkin = "yes"  # the problem's attribute is checked alike, for a solve and a load path
+    with pytest.raises(ValueError, match="petrov_galerkin must be True or False"):
+        p.solve()
+    with pytest.raises(ValueError, match="petrov_galerkin must be True or False"):
+        LoadPath.proportional(p, 2).solve()
+    p.petrov_galerkin = None
 
 
 @pytest.mark.parametrize("level, F", [(5, 0.4), (5, 2.0), (6, 1.0)])

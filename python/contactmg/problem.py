@@ -447,7 +447,11 @@ class ContactProblem:
     def petrov_galerkin_coupling(self) -> bool:
         """Whether Algorithm 2's solves of this problem couple the sliding nodes on the top coarse level."""
         on = self.petrov_galerkin
-        return bool(self._adaptive_2d() and isinstance(self.friction, Coulomb)) if on is None else on
+        if on is None:
+            return bool(self._adaptive_2d() and isinstance(self.friction, Coulomb))
+        if not isinstance(on, (bool, np.bool_)):  # checked here: load paths read it too
+            raise ValueError(f"petrov_galerkin must be True or False, got {on!r}")
+        return bool(on)
 
     def smoothing_omega(self) -> float:
         """The over-relaxation the solves of this problem use (smoother_omega or the default)."""
