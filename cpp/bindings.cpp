@@ -284,7 +284,8 @@ void bind_dim(py::module_& m) {
       .def("solve", [](CS& S, py::object u0, double tol, double rtol, int max_cycles, bool fixed_point, double fp_tol,
                        int fp_max, py::object reference, py::object cycle, py::object nu1, py::object nu2, py::object progress,
                        bool tnnmg, py::object ordering, int threads, int fp_stall, py::object linear, py::object lines,
-                       py::object omega, py::object omega_post, py::object petrov_galerkin) {
+                       py::object omega, py::object omega_post, py::object petrov_galerkin,
+                       py::object upwind_contact_sweep) {
              SolveOptions o;
              if (fp_stall < 0) throw InputError("fixed_point_stall_window must be >= 0 (0: off)");
              o.fixed_point_stall_window = fp_stall;
@@ -308,6 +309,12 @@ void bind_dim(py::module_& m) {
                co.petrov_galerkin = petrov_galerkin.cast<bool>();
                if (co.petrov_galerkin && (tnnmg || fixed_point))
                  throw InputError("petrov_galerkin is a choice of the monotone multigrid cycle (not tnnmg or fixed_point)");
+             }
+             if (!upwind_contact_sweep.is_none()) {
+               if (!py::isinstance<py::bool_>(upwind_contact_sweep)) throw InputError("upwind_contact_sweep must be True or False");
+               co.upwind_contact_sweep = upwind_contact_sweep.cast<bool>();
+               if (co.upwind_contact_sweep && (tnnmg || fixed_point))
+                 throw InputError("upwind_contact_sweep is a choice of the monotone multigrid cycle (not tnnmg or fixed_point)");
              }
              check_smoothing_steps(co.nu1, co.nu2);
              check_omega(co.omega);
@@ -353,6 +360,7 @@ void bind_dim(py::module_& m) {
              out["omega"] = co.omega;
              if (co.omega_post > 0) out["omega_post"] = co.omega_post;
              if (co.petrov_galerkin) out["petrov_galerkin"] = true;
+             if (co.upwind_contact_sweep) out["upwind_contact_sweep"] = true;
              if (tnnmg) { out["linear_correction"] = linear_correction_name(co.linear); out["lines"] = co.lines; }
              out["threads"] = threads == 0 ? max_threads() : (have_openmp() ? threads : 1);
              return out;
@@ -364,8 +372,11 @@ void bind_dim(py::module_& m) {
            py::arg("ordering") = py::none(), py::arg("threads") = 0, py::arg("fixed_point_stall_window") = 0,
            py::arg("linear") = py::none(), py::arg("lines") = py::none(), py::arg("omega") = py::none(),
            py::arg("omega_post") = py::none(), py::arg("petrov_galerkin") = py::none(),
-           "petrov_galerkin: in the settled cycles of a Coulomb solve, the top coarse level also carries the sliding "
-           "nodes' Petrov-Galerkin coupling, with a fallback to the symmetric one (default False; issue 11, seventh part); "
+           py::arg("upwind_contact_sweep") = py::none(),
+           "petrov_galerkin: in every cycle but the first of a Coulomb solve, the top coarse level also carries the sliding "
+           "nodes' Petrov-Galerkin coupling, with a fallback to the symmetric one (default False; issue 11, seventh and tenth parts); "
+           "upwind_contact_sweep: after every fine sweep of a Coulomb solve, one more visit of the contact zone's nodes, the "
+           "sliding ones in the upwind order of the Coulomb Jacobian (default False; issue 11, eleventh part); "
            "omega: over-relaxation of the unbounded block solves of every sweep (default 1, in (0, 2)); "
            "omega_post: the same for the post-smoothing sweeps only (tnnmg: on its coarse levels; default: omega); "
            "linear (tnnmg): its linear correction, 'pcg' (default), 'cycle' or 'coarse'; lines (tnnmg): line "

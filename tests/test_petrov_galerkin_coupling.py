@@ -181,3 +181,21 @@ def test_fallback_refuses_a_growing_cycle(adaptive7):
     assert on.converged
     same_solution(p, off, on)
     assert on.cycles <= off.cycles + 2
+
+
+def test_fallback_judges_cycles_with_a_state_change(adaptive7):
+    # adaptive level 7 at F = 20: the first coupled cycle (the second) also changes the contact state
+    # and does not shrink the correction. Until stop 26 such a cycle was not judged (the Anderson
+    # restart test returned first); now it is refused like any other: the iterate goes back (the
+    # energy is the cycle before's), the cycle reports the smallest step before it (a refused step
+    # that grew by 1e10 read as divergence), and the solve goes on without the coupling.
+    p = hertz_problem("triangle", 7, 20.0, coulomb_at_zero=True, hierarchy=adaptive7)
+    r = p.solve(threads=1)
+    assert r.converged, r.status
+    assert contact_conditions(p, r)["max"] <= 1e-8
+    pg, h = np.asarray(r.history["petrov_galerkin"]), r.history
+    k = int(np.nonzero(pg == 2)[0][0])
+    assert h["rebuilt"][k] and not np.any(pg[k + 1:])
+    assert h["energy"][k] == h["energy"][k - 1]
+    assert h["correction_norm"][k] == min(h["correction_norm"][:k])
+    assert r.extra["petrov_galerkin"]["fallback_cycle"] == k + 1

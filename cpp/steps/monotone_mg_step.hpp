@@ -11,6 +11,7 @@
 #include "steps/tied_correction.hpp"
 #include "steps/settled_anderson.hpp"
 #include "steps/petrov_galerkin_coupling.hpp"
+#include "steps/upwind_contact_sweep.hpp"
 
 namespace cmg {
 
@@ -69,7 +70,8 @@ class MonotoneMultigridStep {
                         FineIterate<d>& it, const CycleOptions& opt, const SweepOrder& fine_order = SweepOrder(),
                         TiedCorrection<d>* tied = nullptr, CycleWorkspace* work = nullptr)
       : P_(P), H_(H), C_(C), built_(built), it_(it), opt_(opt), order_(fine_order), tied_(tied), ws_(work ? *work : own_),
-        r_(ws_.r), old_(ws_.old), anderson_(ws_.anderson), pg_(H, opt.petrov_galerkin && L::coarse_freezes_bound) {
+        r_(ws_.r), old_(ws_.old), anderson_(ws_.anderson), pg_(H, opt.petrov_galerkin && L::coarse_freezes_bound),
+        upwind_(P, fine_order, opt.upwind_contact_sweep && L::coarse_freezes_bound) {
     const Index n = P.num_nodes() * d;
     mask_ = P.base_mask();
     r_.assign(n, 0.0); old_.assign(n, 0.0);  // of the same size: no new pages
@@ -90,7 +92,10 @@ class MonotoneMultigridStep {
     const std::vector<double>& f = P_.load();
     // on all threads: a plain vector copy was a serial pass over two fine vectors (issue 15)
     parallel_for((Index)u.size(), [&](Index k) { old_[k] = u[k]; });
-    for (int s = 0; s < opt_.nu1; ++s) Smoother::sweep(P_, u.data(), true, order_);
+    for (int s = 0; s < opt_.nu1; ++s) {
+      Smoother::sweep(P_, u.data(), true, order_);
+      if (upwind_.on()) upwind_.visit(P_, u.data());
+    }
     pc.lap(Phase::PreSmooth);
     // The fine residual r = f - A u: at the contact rows now (the linearization reads them and adds
     // the friction gradient), every other row where the coarse correction restricts it, formed as
@@ -103,6 +108,7 @@ class MonotoneMultigridStep {
       for (Index c = 0; c < P_.num_contact(); ++c)
         A.residual_row(A.values.data(), u.data(), f.data(), P_.contact_node(c), ahead, r_.data() + d * P_.contact_node(c));
     const bool bounded = linearize();
+    upwind_.order_from(P_, coupling_);
     pc.lap(Phase::Linearize);
     const bool state_changed = mask_ != built_.mask;
     rebuilt = built_.update(H_, A, mask_, hessian_);
@@ -124,8 +130,12 @@ class MonotoneMultigridStep {
                      P_.num_nodes(), true);
     if (tied_) tied_->apply(P_, opt_, u.data());  // two bodies: the common motions, no bounds
     pc.lap(Phase::CoarseCorrection);
-    for (int s = 0; s < opt_.nu2; ++s) Smoother::sweep(P_, u.data(), false, order_, opt_.omega_post);
+    for (int s = 0; s < opt_.nu2; ++s) {
+      Smoother::sweep(P_, u.data(), false, order_, opt_.omega_post);
+      if (upwind_.on()) upwind_.visit(P_, u.data());
+    }
     pc.lap(Phase::PostSmooth);
+    double measured = -1;  // the step, when the restart test has measured it already
     if constexpr (L::coarse_freezes_bound) {
       // old_ = x (before the cycle), u = G(x): mix the cycles (settled_anderson.hpp).
       // A 3D sliding node's friction Hessian changes with its u_T in every cycle (a rebuild, but
@@ -152,29 +162,32 @@ class MonotoneMultigridStep {
             anderson_.step(old_, u, [&](std::vector<double>& y, const std::vector<double>& plain) { return admit_mixed(y, plain); }, restart);
         if (state_changed && !mixed) {
           parallel_for((Index)u.size(), [&](Index k) { it_.Au[k] += r_[k]; });
-          pc.lap(Phase::Norm);
-          best_step_ = std::min(best_step_, std::sqrt(std::max(e_change, 0.0)));
-          return std::sqrt(std::max(e_change, 0.0));
+          measured = std::sqrt(std::max(e_change, 0.0));
         }
       }
     }
     // Au += A (u - u_old) and e = |u - u_old|_A^2 in one pass (were four: difference, product,
     // update, dot); sums over fixed chunks of rows, so the same on any thread count
-    const double e = parallel_sum(A.rows, [&](Index i) {
+    const double step = measured >= 0 ? measured : std::sqrt(std::max(parallel_sum(A.rows, [&](Index i) {
       A.prefetch_ahead(i, u.data(), old_.data());  // two gathers a block (block_matrix.hpp says why)
       prefetch_row_values<d>(A.values.data(), A.indptr.data(), i, ahead, A.rows);
       Vec<d> y = Vec<d>::Zero();
       accumulate_block_differences<d>(A.values.data(), A.indices.data(), A.indptr[i], A.indptr[i + 1], u.data(), old_.data(), y.data());
       VecMap<d>(it_.Au.data() + d * i) += y;
       return (CVecMap<d>(u.data() + d * i) - CVecMap<d>(old_.data() + d * i)).dot(y);
-    });
-    const double step = std::sqrt(std::max(e, 0.0));
+    }), 0.0));
+    // judged in every cycle with the coupling, a cycle with a state change too (it was not: a coupled
+    // cycle that grew by 1e10 while the state changed went on and read as divergence)
     if (pg_.judge(step, best_step_)) {
       // the coupling's step was no smaller than every step before: refused, the iterate back to
       // x (feasible, as every iterate), A u with it; the cycle map changes: the history starts again
       anderson_.reset();
       parallel_for((Index)u.size(), [&](Index k) { u[k] = old_[k]; });
       A.multiply(u.data(), it_.Au.data());
+      // the iterate did not move: the cycle reports the smallest step before it, not the refused
+      // one (a refused step that grew by 1e10 read as divergence and ended a solve the fallback saves)
+      pc.lap(Phase::Norm);
+      return best_step_;
     } else {
       best_step_ = std::min(best_step_, step);
     }
@@ -243,7 +256,7 @@ class MonotoneMultigridStep {
         bounded = true;
       if (!Hc.isZero(0.0)) hessian_.emplace_back(i, Hc);
       if constexpr (L::coarse_freezes_bound)
-        if (pg_.wanted()) {
+        if (pg_.wanted() || upwind_.on()) {
           const Vec<d> w = bound_coupling<L, d>(P_.node(c), it_.u.data() + k, r_[k]);
           if (!w.isZero(0.0)) coupling_.emplace_back(i, w);
         }
@@ -315,6 +328,7 @@ class MonotoneMultigridStep {
   std::vector<std::pair<Index, Mat<d>>> hessian_;
   SettledAnderson& anderson_;
   PetrovGalerkinCoupling<d> pg_;  // declared after H_: clears its overlay of H_ first
+  UpwindContactSweep<d, L> upwind_;
   std::vector<std::pair<Index, Vec<d>>> coupling_;  // sliding node -> w (bound_coupling), when wanted
   bool first_ = true;
   double best_step_ = kInf;  // the smallest |u^{k+1} - u^k|_A of this solve

@@ -20,7 +20,7 @@ from typing import Callable, List, Optional, Sequence
 
 import numpy as np
 
-from .problem import INT32_MAX, METHODS, SOLVE_TAKES_CYCLE_OPTIONS, SOLVE_TAKES_OMEGA, SOLVE_TAKES_OMEGA_POST, SOLVE_TAKES_PETROV_GALERKIN, ContactProblem, Dirichlet, \
+from .problem import INT32_MAX, METHODS, SOLVE_TAKES_CYCLE_OPTIONS, SOLVE_TAKES_OMEGA, SOLVE_TAKES_OMEGA_POST, ContactProblem, Dirichlet, \
     assemble_load, dirichlet_arrays
 from .results import SLIP, STICK, ContactResult
 
@@ -148,8 +148,7 @@ class LoadPath:
         # the problem's own choices, as in its single solves (a one-step path is one solve, bit for bit)
         if SOLVE_TAKES_OMEGA_POST and p.post_smoothing_omega() is not None:
             kw["omega_post"] = p.post_smoothing_omega()
-        if SOLVE_TAKES_PETROV_GALERKIN and method == "nmg" and p.petrov_galerkin_coupling():
-            kw["petrov_galerkin"] = True
+        kw.update(p.cycle_switches(method))
         t_path = time.perf_counter()
         steps: List[ContactResult] = []
         previous = self.initial

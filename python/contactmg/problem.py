@@ -41,6 +41,9 @@ SOLVE_TAKES_OMEGA = "omega:" in (_core.ContactSolver2D.solve.__doc__ or "")
 SOLVE_TAKES_OMEGA_POST = "omega_post:" in (_core.ContactSolver2D.solve.__doc__ or "")
 # Issue 11, seventh and tenth parts: the sliding nodes' Petrov-Galerkin coupling on level L-1 (solve(petrov_galerkin=...))
 SOLVE_TAKES_PETROV_GALERKIN = "petrov_galerkin:" in (_core.ContactSolver2D.solve.__doc__ or "")
+# Issue 11, eleventh part: one more visit of the contact zone after every fine sweep, the sliding nodes
+# upwind (solve(upwind_contact_sweep=...))
+SOLVE_TAKES_UPWIND_CONTACT_SWEEP = "upwind_contact_sweep:" in (_core.ContactSolver2D.solve.__doc__ or "")
 # The default omega by cell type. Simplices: 1.3 (symmetric SOR). Nodal block Gauss-Seidel on P1
 # elasticity levels off near 0.34 per F(3,3) cycle on the adaptive Hertz levels (Q1: 0.14 on the
 # unit square); over-relaxed it contracts by 0.26 / 0.235 / 0.216 / 0.216 at level 11 with omega
@@ -433,6 +436,13 @@ class ContactProblem:
     # part: the adaptive Table 1 flat for F <= 2), off otherwise (uniform level 7 at F = 5 takes 19
     # cycles with it, 14 without; in 3D it saves at most a cycle); True/False force it.
     petrov_galerkin: Optional[bool] = None
+    # Algorithm 2's fine sweeps each followed by one more visit of the contact nodes, the sliding
+    # ones in the upwind order of the Coulomb Jacobian (CycleOptions::upwind_contact_sweep; the "nmg"
+    # solves of a Coulomb problem): None = on for 2D adaptive hierarchies (issue 11, eleventh part:
+    # one cycle fewer in 16 of the 50 cells of the adaptive Table 1, none more, at 3-6 % a cycle),
+    # off otherwise (uniform triangles: one cycle fewer only on level 7 at F = 0.4 / 2, at 3-12 % a
+    # cycle; in 3D at most one fewer at 10-40 % a cycle); True/False force it.
+    upwind_contact_sweep: Optional[bool] = None
 
     def _adaptive_2d(self) -> bool:
         return self.hierarchy.kind == "adaptive" and self.mesh.dim == 2
@@ -444,14 +454,35 @@ class ContactProblem:
             w = DEFAULT_OMEGA_POST_ADAPTIVE.get(self.mesh.cell_type)
         return None if w is None else _checked_omega(w, "omega_post")
 
+    def _cycle_choice(self, name: str, on, default: bool) -> bool:
+        """A switch of Algorithm 2's cycles (checked here: load paths read it too); None: `default`
+        for Coulomb friction, off for the other laws."""
+        if on is None:
+            return bool(default and isinstance(self.friction, Coulomb))
+        if not isinstance(on, (bool, np.bool_)):
+            raise ValueError(f"{name} must be True or False, got {on!r}")
+        return bool(on)
+
     def petrov_galerkin_coupling(self) -> bool:
         """Whether Algorithm 2's solves of this problem couple the sliding nodes on the top coarse level."""
-        on = self.petrov_galerkin
-        if on is None:
-            return bool(self._adaptive_2d() and isinstance(self.friction, Coulomb))
-        if not isinstance(on, (bool, np.bool_)):  # checked here: load paths read it too
-            raise ValueError(f"petrov_galerkin must be True or False, got {on!r}")
-        return bool(on)
+        return self._cycle_choice("petrov_galerkin", self.petrov_galerkin, self._adaptive_2d())
+
+    def contact_sweep_upwind(self) -> bool:
+        """Whether Algorithm 2's fine sweeps of this problem are each followed by an upwind visit of
+        the contact zone."""
+        return self._cycle_choice("upwind_contact_sweep", self.upwind_contact_sweep, self._adaptive_2d())
+
+    def cycle_switches(self, method: str) -> dict:
+        """The core solve's keywords for this problem's own choices of Algorithm 2's cycles (method
+        "nmg"): petrov_galerkin and upwind_contact_sweep where on."""
+        kw = {}
+        if method != "nmg":
+            return kw
+        if self.petrov_galerkin_coupling() and SOLVE_TAKES_PETROV_GALERKIN:
+            kw["petrov_galerkin"] = True
+        if self.contact_sweep_upwind() and SOLVE_TAKES_UPWIND_CONTACT_SWEEP:
+            kw["upwind_contact_sweep"] = True
+        return kw
 
     def smoothing_omega(self) -> float:
         """The over-relaxation the solves of this problem use (smoother_omega or the default)."""
@@ -537,7 +568,8 @@ class ContactProblem:
               ordering: Optional[str] = None, fixed_point_stall_window: int = 0,
               linear: Optional[str] = None, lines: Optional[bool] = None,
               omega: Optional[float] = None, omega_post: Optional[float] = None,
-              petrov_galerkin: Optional[bool] = None) -> ContactResult:
+              petrov_galerkin: Optional[bool] = None,
+              upwind_contact_sweep: Optional[bool] = None) -> ContactResult:
         """Solve with `method`: "nmg" (Algorithm 2 for Coulomb; truncated monotone multigrid for
         frictionless and Tresca; linear multigrid without contact), "tnnmg" (truncated nonsmooth
         Newton multigrid: the fine nonlinear sweeps, one linear cycle for the truncated Newton
@@ -567,7 +599,10 @@ class ContactProblem:
         `petrov_galerkin` ("nmg", and "linear"'s reference solve): in Algorithm 2's cycles after the first,
         the top coarse level also carries the sliding nodes' Petrov-Galerkin coupling, switched off for
         the rest of the solve by a cycle whose correction is no smaller than every one before; None: petrov_galerkin_coupling(). result.history["petrov_galerkin"]: 1 in the cycles
-        with it, 2 in the one that switched it off; result.extra["petrov_galerkin"] when on."""
+        with it, 2 in the one that switched it off; result.extra["petrov_galerkin"] when on.
+        `upwind_contact_sweep` ("nmg", and "linear"'s reference solve): every fine sweep of Algorithm 2
+        followed by one more visit of the contact zone's nodes, the sliding ones in the upwind order of the
+        Coulomb Jacobian; None: contact_sweep_upwind(). result.extra["upwind_contact_sweep"] is True when on."""
         if method not in METHODS:
             raise ValueError(f"method must be one of {METHODS}, got {method!r}")
         options = self._options(cycle, nu1, nu2)
@@ -616,17 +651,20 @@ class ContactProblem:
             if not SOLVE_TAKES_OMEGA_POST:
                 raise ValueError("omega_post needs a core built with it (issue 11, fifth part)")
             kw["omega_post"] = omega_post
-        asked = petrov_galerkin is not None
-        petrov_galerkin = self.petrov_galerkin_coupling() if petrov_galerkin is None else petrov_galerkin
-        if not isinstance(petrov_galerkin, (bool, np.bool_)):
-            raise ValueError(f"petrov_galerkin must be True or False, got {petrov_galerkin!r}")
-        petrov_galerkin = bool(petrov_galerkin)
-        if petrov_galerkin and method not in ("nmg", "linear") and asked:
-            raise ValueError(f"petrov_galerkin is a choice of method 'nmg' (Algorithm 2), not {method!r}")
-        if petrov_galerkin and method == "nmg":
-            if not SOLVE_TAKES_PETROV_GALERKIN:
-                raise ValueError("petrov_galerkin needs a core built with it (issue 11, seventh part)")
-            kw["petrov_galerkin"] = True
+        choices = {}
+        for name, value, default, where, takes, part in (
+                ("petrov_galerkin", petrov_galerkin, self.petrov_galerkin, self._adaptive_2d(),
+                 SOLVE_TAKES_PETROV_GALERKIN, "seventh"),
+                ("upwind_contact_sweep", upwind_contact_sweep, self.upwind_contact_sweep, self._adaptive_2d(),
+                 SOLVE_TAKES_UPWIND_CONTACT_SWEEP, "eleventh")):
+            on = self._cycle_choice(name, default if value is None else value, where)
+            if on and method not in ("nmg", "linear") and value is not None:
+                raise ValueError(f"{name} is a choice of method 'nmg' (Algorithm 2), not {method!r}")
+            if on and method == "nmg":
+                if not takes:
+                    raise ValueError(f"{name} needs a core built with it (issue 11, {part} part)")
+                kw[name] = True
+            choices[name] = on
         if SOLVE_TAKES_CYCLE_OPTIONS:
             kw.update(cycle=options.cycle, nu1=options.nu1, nu2=options.nu2, progress=progress)
         elif progress is not None:
@@ -651,7 +689,7 @@ class ContactProblem:
         if reference is None:
             reference = self.solve("nmg", tol=tol, rtol=rtol, max_cycles=max_cycles, cycle=options.cycle,
                                    nu1=options.nu1, nu2=options.nu2, threads=threads, ordering=ordering, omega=omega,
-                                   omega_post=omega_post, petrov_galerkin=petrov_galerkin)
+                                   omega_post=omega_post, **choices)
         t0 = time.perf_counter()
         solver = self._known_state_solver(reference, options)
         build = time.perf_counter() - t0
@@ -676,6 +714,8 @@ class ContactProblem:
             off = np.nonzero(pg == 2)[0]
             res.extra["petrov_galerkin"] = {"cycles": int(np.count_nonzero(pg)),
                                             "fallback_cycle": int(off[0]) + 1 if len(off) else None}
+        if raw.get("upwind_contact_sweep"):  # only when set (issue 11, eleventh part)
+            res.extra["upwind_contact_sweep"] = True
         if method == "fixed-point" and "outer_changes" in raw:
             res.extra["outer_changes"] = [float(c) for c in raw["outer_changes"]]
         if "threads" in raw:
