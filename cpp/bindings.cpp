@@ -375,7 +375,7 @@ void bind_dim(py::module_& m) {
            py::arg("upwind_contact_sweep") = py::none(),
            "petrov_galerkin: in every cycle but the first of a Coulomb solve, the top coarse level also carries the sliding "
            "nodes' Petrov-Galerkin coupling, with a fallback to the symmetric one (default False; issue 11, seventh and tenth parts); "
-           "upwind_contact_sweep: after every fine sweep of a Coulomb solve, one more visit of the contact zone's nodes, the "
+           "upwind_contact_sweep: after every fine sweep of a Coulomb solve, one more visit of the contact nodes, the "
            "sliding ones in the upwind order of the Coulomb Jacobian (default False; issue 11, eleventh part); "
            "omega: over-relaxation of the unbounded block solves of every sweep (default 1, in (0, 2)); "
            "omega_post: the same for the post-smoothing sweeps only (tnnmg: on its coarse levels; default: omega); "

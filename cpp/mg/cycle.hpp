@@ -68,9 +68,10 @@ struct CycleOptions {
   // that coarse correction is not an energy descent; the Python problem turns it on where it pays
   // (2D adaptive hierarchies).
   bool petrov_galerkin = false;
-  // Algorithm 2: one more visit of the contact zone's nodes after every fine sweep, the sliding ones
+  // Algorithm 2: one more visit of the contact nodes after every fine sweep, the sliding ones
   // in the upwind order of the Coulomb Jacobian (steps/upwind_contact_sweep.hpp; issue 11, eleventh
-  // part). Off here; the Python problem turns it on for Coulomb friction.
+  // part). Off here; the Python problem turns it on for Coulomb friction on 2D adaptive
+  // hierarchies.
   bool upwind_contact_sweep = false;
   double post_omega() const { return omega_post > 0 ? omega_post : omega; }
 };

@@ -1,7 +1,7 @@
 // One more Gauss-Seidel visit of the contact nodes after every fine sweep of Algorithm 2, the
 // sliding ones in the upwind order of the Coulomb Jacobian (issue 11, eleventh part;
 // CycleOptions::upwind_contact_sweep, off in the core; the Python problem turns it on for Coulomb
-// friction in 2D).
+// friction on 2D adaptive hierarchies).
 //
 // Why: a sliding node's tangential row is that of J = K + w_p e_pn^T K (w_p = -F t, t the slip
 // direction; contact_node.hpp's bound_coupling), and its normal row couples to the neighbours'

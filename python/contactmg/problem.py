@@ -41,7 +41,7 @@ SOLVE_TAKES_OMEGA = "omega:" in (_core.ContactSolver2D.solve.__doc__ or "")
 SOLVE_TAKES_OMEGA_POST = "omega_post:" in (_core.ContactSolver2D.solve.__doc__ or "")
 # Issue 11, seventh and tenth parts: the sliding nodes' Petrov-Galerkin coupling on level L-1 (solve(petrov_galerkin=...))
 SOLVE_TAKES_PETROV_GALERKIN = "petrov_galerkin:" in (_core.ContactSolver2D.solve.__doc__ or "")
-# Issue 11, eleventh part: one more visit of the contact zone after every fine sweep, the sliding nodes
+# Issue 11, eleventh part: one more visit of the contact nodes after every fine sweep, the sliding ones
 # upwind (solve(upwind_contact_sweep=...))
 SOLVE_TAKES_UPWIND_CONTACT_SWEEP = "upwind_contact_sweep:" in (_core.ContactSolver2D.solve.__doc__ or "")
 # The default omega by cell type. Simplices: 1.3 (symmetric SOR). Nodal block Gauss-Seidel on P1
@@ -469,7 +469,7 @@ class ContactProblem:
 
     def contact_sweep_upwind(self) -> bool:
         """Whether Algorithm 2's fine sweeps of this problem are each followed by an upwind visit of
-        the contact zone."""
+        the contact nodes."""
         return self._cycle_choice("upwind_contact_sweep", self.upwind_contact_sweep, self._adaptive_2d())
 
     def cycle_switches(self, method: str) -> dict:
@@ -601,7 +601,7 @@ class ContactProblem:
         the rest of the solve by a cycle whose correction is no smaller than every one before; None: petrov_galerkin_coupling(). result.history["petrov_galerkin"]: 1 in the cycles
         with it, 2 in the one that switched it off; result.extra["petrov_galerkin"] when on.
         `upwind_contact_sweep` ("nmg", and "linear"'s reference solve): every fine sweep of Algorithm 2
-        followed by one more visit of the contact zone's nodes, the sliding ones in the upwind order of the
+        followed by one more visit of the contact nodes, the sliding ones in the upwind order of the
         Coulomb Jacobian; None: contact_sweep_upwind(). result.extra["upwind_contact_sweep"] is True when on."""
         if method not in METHODS:
             raise ValueError(f"method must be one of {METHODS}, got {method!r}")
