@@ -62,7 +62,6 @@ L9 / L10: from F = 20 to 40 with no turn, at Algorithm 2's own F = 40 solution.
     --compare-alg2   at the end point: Algorithm 2 from u = 0 at the end F and its distance
 """
 import argparse
-import json
 import os
 import sys
 import time
@@ -73,6 +72,7 @@ import scipy.sparse.linalg as spla
 
 sys.path.insert(0, os.path.dirname(__file__))
 
+from bench_json import write_json  # noqa: E402
 from coulomb_newton_diagnosis import ac_residual, coulomb_state, hertz_system, hierarchy  # noqa: E402
 
 FREE, STICK, SLIP_P, SLIP_M = 0, 1, 2, 3
@@ -601,10 +601,7 @@ def main():
     if a.verify_end and abs(F_end - a.to_F) < 1e-12 * a.to_F:
         out["verify_end"] = verify_end(H, S, S["D"] * x_end, a.to_F, a.verify_cycles)
     out["total_seconds"] = time.perf_counter() - t0
-    if a.json:
-        os.makedirs(os.path.dirname(a.json) or ".", exist_ok=True)
-        with open(a.json, "w") as fh:
-            json.dump(out, fh, indent=1)
+    write_json(a.json, out)
 
 
 if __name__ == "__main__":

@@ -32,7 +32,6 @@ nu:      linear F(nu, nu) rates on the adaptive levels for nu = 1, 2, 3, 4, 6 (a
 Cycle counts and rates do not depend on the machine's load.
 """
 import argparse
-import json
 import os
 import pickle
 import sys
@@ -40,6 +39,7 @@ import sys
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(__file__))
+from bench_json import write_json  # noqa: E402
 from linear_multigrid import contraction  # noqa: E402
 
 from contactmg.generators import HERTZ_TOP, hertz_half_disk, hertz_projector  # noqa: E402
@@ -184,10 +184,7 @@ def main():
         part_uniform(range(a.uniform_levels[0], a.uniform_levels[1] + 1), rows)
     if "nu" in a.parts:
         part_nu(full, a.levels, rows)
-    if a.json:
-        os.makedirs(os.path.dirname(a.json) or ".", exist_ok=True)
-        with open(a.json, "w") as fh:
-            json.dump(rows, fh, indent=1)
+    write_json(a.json, rows)
 
 
 if __name__ == "__main__":

@@ -18,12 +18,12 @@ from u = 0, F(3,3); every converged result is checked by contactmg.checks.contac
 Cycle counts do not depend on the machine's load.
 """
 import argparse
-import json
 import os
 import sys
 
 sys.path.insert(0, os.path.dirname(__file__))
 
+from bench_json import write_json  # noqa: E402
 from cycle_growth import adaptive_hierarchy  # noqa: E402
 from contactmg.checks import contact_conditions  # noqa: E402
 from contactmg.hertz import hertz_problem_on  # noqa: E402
@@ -62,10 +62,7 @@ def main():
                 line.append(f"{r.cycles}{'' if r.converged else '!'}")
                 counts.append(r.cycles)
             print(f"  {name:8} F={F:<5g} " + " / ".join(line) + f"   spread {max(counts) - min(counts)}", flush=True)
-    if a.json:
-        os.makedirs(os.path.dirname(a.json) or ".", exist_ok=True)
-        with open(a.json, "w") as fh:
-            json.dump(rows, fh, indent=1)
+    write_json(a.json, rows)
 
 
 if __name__ == "__main__":

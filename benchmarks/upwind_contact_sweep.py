@@ -9,14 +9,17 @@ default.) tol 1e-11 from u = 0, F(3,3); cycle counts do not depend on the machin
 seconds do (run it alone).
 """
 import argparse
-import json
 import os
+import sys
 
 import numpy as np
 
-from contactmg.checks import contact_conditions
-from contactmg.hertz import hertz_problem
-from contactmg.sphere import sphere_adaptive_hierarchy, sphere_problem, sphere_problem_on
+sys.path.insert(0, os.path.dirname(__file__))
+
+from bench_json import write_json  # noqa: E402
+from contactmg.checks import contact_conditions  # noqa: E402
+from contactmg.hertz import hertz_problem  # noqa: E402
+from contactmg.sphere import sphere_adaptive_hierarchy, sphere_problem, sphere_problem_on  # noqa: E402
 
 
 def cases(which):
@@ -60,10 +63,7 @@ def main():
         print(f"  {name:24} F={F:<4g} {f['cycles']}{'' if f['converged'] else '!'} / {n['cycles']}{'' if n['converged'] else '!'}"
               f"   {f['violation'] or float('nan'):.1e} / {n['violation'] or float('nan'):.1e}   {row['difference']:.1e}"
               f"   {f['ms_per_cycle']:.1f} / {n['ms_per_cycle']:.1f}", flush=True)
-    if a.json:
-        os.makedirs(os.path.dirname(a.json) or ".", exist_ok=True)
-        with open(a.json, "w") as fh:
-            json.dump(rows, fh, indent=1)
+    write_json(a.json, rows)
 
 
 if __name__ == "__main__":

@@ -52,10 +52,10 @@ class UpwindContactSweep {
     if (!on_) return;
     std::vector<std::uint8_t> swept(P.num_nodes(), fine_order.all() ? 1 : 0);
     if (!fine_order.all()) fine_order.visit(P.num_nodes(), true, [&](Index i) { swept[i] = 1; });
-    contact_.assign(P.num_nodes(), -1);
+    in_.assign(P.num_contact(), 0);
     for (Index c = 0; c < P.num_contact(); ++c)
       if (swept[P.contact_node(c)] && friction_does_not_dominate(P, c)) nodes_.push_back(c);
-    for (Index c : nodes_) contact_[P.contact_node(c)] = c;
+    for (Index c : nodes_) in_[c] = 1;
     for (Index c : nodes_) order_.push_back(P.contact_node(c));
   }
 
@@ -74,7 +74,7 @@ class UpwindContactSweep {
     const Index nc = P.num_contact();
     slide_.assign(nc, -1);
     for (std::size_t k = 0; k < coupling.size(); ++k) {
-      const Index c = contact_[coupling[k].first];
+      const Index c = visited(P, coupling[k].first);
       if (c >= 0) slide_[c] = (Index)k;
     }
     order_.clear();
@@ -89,10 +89,10 @@ class UpwindContactSweep {
     };
     for (std::size_t k = 0; k < coupling.size(); ++k) {
       const auto& [p, w] = coupling[k];
-      if (contact_[p] < 0) continue;
+      if (visited(P, p) < 0) continue;
       double best = -1;
       for (Index q = A.indptr[p]; q < A.indptr[p + 1]; ++q) {
-        const Index j = contact_[A.indices[q]];
+        const Index j = visited(P, A.indices[q]);
         if (A.indices[q] == p || j < 0 || slide_[j] < 0) continue;
         const double s = tangential(A.block(q), w);
         if (s > best) { best = s; down_[k] = slide_[j]; }
@@ -109,10 +109,16 @@ class UpwindContactSweep {
     };
     for (int pass = 0; pass < 2; ++pass)  // upwind ends first, then what is left (loops)
       for (std::size_t k = 0; k < coupling.size(); ++k)
-        if (contact_[coupling[k].first] >= 0 && (pass == 1 || !leaned_[k])) follow((Index)k);
+        if (visited(P, coupling[k].first) >= 0 && (pass == 1 || !leaned_[k])) follow((Index)k);
   }
 
  private:
+  // the contact index of fine node i where it is one of nodes_, else -1
+  Index visited(const ContactProblem<d>& P, Index i) const {
+    const Index c = P.contact_of_node(i);
+    return c >= 0 && in_[c] ? c : -1;
+  }
+
   // Whether the node's tangential stiffness exceeds what friction couples into its row: F_p (the
   // bound's slope, law::bound_slope) times |K_pq(n, T)| summed over the node itself and its contact
   // neighbours, against lambda_min(K_pp(T, T)). Where friction dominates, the nodal rule lags its
@@ -134,7 +140,7 @@ class UpwindContactSweep {
 
   bool on_;
   std::vector<Index> nodes_;    // the contact indices the fine sweeps visit
-  std::vector<Index> contact_;  // per fine node: its contact index among nodes_, or -1
+  std::vector<std::uint8_t> in_;  // per contact index: one of nodes_
   std::vector<Index> order_;    // this cycle's order (fine rows)
   std::vector<Index> slide_, down_;
   std::vector<std::uint8_t> leaned_, mark_;
