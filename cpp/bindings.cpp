@@ -285,7 +285,7 @@ void bind_dim(py::module_& m) {
                        int fp_max, py::object reference, py::object cycle, py::object nu1, py::object nu2, py::object progress,
                        bool tnnmg, py::object ordering, int threads, int fp_stall, py::object linear, py::object lines,
                        py::object omega, py::object omega_post, py::object petrov_galerkin,
-                       py::object upwind_contact_sweep) {
+                       py::object upwind_contact_sweep, py::object projected_coarse_correction) {
              SolveOptions o;
              if (fp_stall < 0) throw InputError("fixed_point_stall_window must be >= 0 (0: off)");
              o.fixed_point_stall_window = fp_stall;
@@ -315,6 +315,13 @@ void bind_dim(py::module_& m) {
                co.upwind_contact_sweep = upwind_contact_sweep.cast<bool>();
                if (co.upwind_contact_sweep && (tnnmg || fixed_point))
                  throw InputError("upwind_contact_sweep is a choice of the monotone multigrid cycle (not tnnmg or fixed_point)");
+             }
+             if (!projected_coarse_correction.is_none()) {
+               if (!py::isinstance<py::bool_>(projected_coarse_correction))
+                 throw InputError("projected_coarse_correction must be True or False");
+               co.projected_coarse_correction = projected_coarse_correction.cast<bool>();
+               if (co.projected_coarse_correction && (tnnmg || fixed_point))
+                 throw InputError("projected_coarse_correction is a choice of the monotone multigrid cycle (not tnnmg or fixed_point)");
              }
              check_smoothing_steps(co.nu1, co.nu2);
              check_omega(co.omega);
@@ -361,6 +368,7 @@ void bind_dim(py::module_& m) {
              if (co.omega_post > 0) out["omega_post"] = co.omega_post;
              if (co.petrov_galerkin) out["petrov_galerkin"] = true;
              if (co.upwind_contact_sweep) out["upwind_contact_sweep"] = true;
+             if (co.projected_coarse_correction) out["projected_coarse_correction"] = true;
              if (tnnmg) { out["linear_correction"] = linear_correction_name(co.linear); out["lines"] = co.lines; }
              out["threads"] = threads == 0 ? max_threads() : (have_openmp() ? threads : 1);
              return out;
@@ -372,11 +380,13 @@ void bind_dim(py::module_& m) {
            py::arg("ordering") = py::none(), py::arg("threads") = 0, py::arg("fixed_point_stall_window") = 0,
            py::arg("linear") = py::none(), py::arg("lines") = py::none(), py::arg("omega") = py::none(),
            py::arg("omega_post") = py::none(), py::arg("petrov_galerkin") = py::none(),
-           py::arg("upwind_contact_sweep") = py::none(),
+           py::arg("upwind_contact_sweep") = py::none(), py::arg("projected_coarse_correction") = py::none(),
            "petrov_galerkin: in every cycle but the first of a Coulomb solve, the top coarse level also carries the sliding "
            "nodes' Petrov-Galerkin coupling, with a fallback to the symmetric one (default False; issue 11, seventh and tenth parts); "
            "upwind_contact_sweep: after every fine sweep of a Coulomb solve, one more visit of the contact nodes, the "
            "sliding ones in the upwind order of the Coulomb Jacobian (default False; issue 11, eleventh part); "
+           "projected_coarse_correction: the coarse correction without the inactive contact nodes' gap bounds, projected onto "
+           "the gap and taken with the exact frozen-energy line search (default False; for rotated contact frames); "
            "omega: over-relaxation of the unbounded block solves of every sweep (default 1, in (0, 2)); "
            "omega_post: the same for the post-smoothing sweeps only (tnnmg: on its coarse levels; default: omega); "
            "linear (tnnmg): its linear correction, 'pcg' (default), 'cycle' or 'coarse'; lines (tnnmg): line "

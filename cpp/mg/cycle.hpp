@@ -73,6 +73,15 @@ struct CycleOptions {
   // part). Off here; the Python problem turns it on for Coulomb friction on 2D adaptive
   // hierarchies.
   bool upwind_contact_sweep = false;
+  // Algorithm 2 and the truncated monotone cycle: the coarse correction without the gap bounds of
+  // the inactive contact nodes, projected onto the gap at the fine level and taken with the exact
+  // line search of the frozen-bound energy (steps/monotone_mg_step.hpp). Where a contact frame is
+  // not a signed permutation of the axes, the monotone restriction turns a node's gap bound into
+  // bounds on every coarse component it touches, and a node closing on the obstacle holds back the
+  // coarse motions around it (the cork: 16 / 22 / 29 cycles on levels 2-4 without friction, 11 /
+  // 12 / 12 with this). Every step still lowers the frozen energy. Off here; the Python problem turns
+  // it on where a contact frame is rotated.
+  bool projected_coarse_correction = false;
   double post_omega() const { return omega_post > 0 ? omega_post : omega; }
 };
 

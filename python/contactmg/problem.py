@@ -44,6 +44,8 @@ SOLVE_TAKES_PETROV_GALERKIN = "petrov_galerkin:" in (_core.ContactSolver2D.solve
 # Issue 11, eleventh part: one more visit of the contact nodes after every fine sweep, the sliding ones
 # upwind (solve(upwind_contact_sweep=...))
 SOLVE_TAKES_UPWIND_CONTACT_SWEEP = "upwind_contact_sweep:" in (_core.ContactSolver2D.solve.__doc__ or "")
+# the projected coarse correction for rotated contact frames (solve(projected_coarse_correction=...))
+SOLVE_TAKES_PROJECTED_COARSE = "projected_coarse_correction:" in (_core.ContactSolver2D.solve.__doc__ or "")
 # The default omega by cell type. Simplices: 1.3 (symmetric SOR). Nodal block Gauss-Seidel on P1
 # elasticity levels off near 0.34 per F(3,3) cycle on the adaptive Hertz levels (Q1: 0.14 on the
 # unit square); over-relaxed it contracts by 0.26 / 0.235 / 0.216 / 0.216 at level 11 with omega
@@ -443,6 +445,15 @@ class ContactProblem:
     # off otherwise (uniform triangles: one cycle fewer only on level 7 at F = 0.4 / 2, at 3-12 % a
     # cycle; in 3D at most one fewer at 10-40 % a cycle); True/False force it.
     upwind_contact_sweep: Optional[bool] = None
+    # The coarse correction of "nmg" without the inactive contact nodes' gap bounds, projected onto
+    # the gap and taken with the exact line search of the frozen-bound energy (a descent step, so
+    # the cycle stays monotone; CycleOptions::projected_coarse_correction): None = on where a contact
+    # frame is not a signed permutation of the axes (curved obstacles, tilted planes, curved
+    # interfaces), whose monotone bound restriction bounds every coarse component a gap touches (the
+    # cork without friction: 16 / 22 / 29 cycles on levels 2-4 of 8 axial layers become 11 / 12 / 12);
+    # off for axis-aligned frames, where the restriction bounds only the normal components and the
+    # projected step costs cycles (adaptive Hertz level 11 at F = 0.4: 12 -> 15); True/False force it.
+    projected_coarse_correction: Optional[bool] = None
 
     def _adaptive_2d(self) -> bool:
         return self.hierarchy.kind == "adaptive" and self.mesh.dim == 2
@@ -454,14 +465,28 @@ class ContactProblem:
             w = DEFAULT_OMEGA_POST_ADAPTIVE.get(self.mesh.cell_type)
         return None if w is None else _checked_omega(w, "omega_post")
 
-    def _cycle_choice(self, name: str, on, default: bool) -> bool:
-        """A switch of Algorithm 2's cycles (checked here: load paths read it too); None: `default`
-        for Coulomb friction, off for the other laws."""
+    def _switch(self, name: str, on, default: bool) -> bool:
+        """A switch of the "nmg" cycles (checked here: load paths read it too); None: `default`."""
         if on is None:
-            return bool(default and isinstance(self.friction, Coulomb))
+            return bool(default)
         if not isinstance(on, (bool, np.bool_)):
             raise ValueError(f"{name} must be True or False, got {on!r}")
         return bool(on)
+
+    def _cycle_choice(self, name: str, on, default: bool) -> bool:
+        """A switch of Algorithm 2's cycles; None: `default` for Coulomb friction, off for the other laws."""
+        return self._switch(name, on, default and isinstance(self.friction, Coulomb))
+
+    def rotated_frames(self) -> bool:
+        """Is some contact frame not a signed permutation of the axes?"""
+        if self.law == "linear" or len(self.contact.nodes) == 0:
+            return False
+        a = np.abs(np.asarray(self.contact.frames, float))
+        return bool(np.any(np.minimum(a, np.abs(a - 1.0)) > 1e-12))
+
+    def coarse_correction_projected(self) -> bool:
+        """Whether the "nmg" cycles of this problem take the projected coarse correction."""
+        return self._switch("projected_coarse_correction", self.projected_coarse_correction, self.rotated_frames())
 
     def petrov_galerkin_coupling(self) -> bool:
         """Whether Algorithm 2's solves of this problem couple the sliding nodes on the top coarse level."""
@@ -482,6 +507,8 @@ class ContactProblem:
             kw["petrov_galerkin"] = True
         if self.contact_sweep_upwind() and SOLVE_TAKES_UPWIND_CONTACT_SWEEP:
             kw["upwind_contact_sweep"] = True
+        if self.coarse_correction_projected() and SOLVE_TAKES_PROJECTED_COARSE:
+            kw["projected_coarse_correction"] = True
         return kw
 
     def smoothing_omega(self) -> float:
@@ -569,7 +596,8 @@ class ContactProblem:
               linear: Optional[str] = None, lines: Optional[bool] = None,
               omega: Optional[float] = None, omega_post: Optional[float] = None,
               petrov_galerkin: Optional[bool] = None,
-              upwind_contact_sweep: Optional[bool] = None) -> ContactResult:
+              upwind_contact_sweep: Optional[bool] = None,
+              projected_coarse_correction: Optional[bool] = None) -> ContactResult:
         """Solve with `method`: "nmg" (Algorithm 2 for Coulomb; truncated monotone multigrid for
         frictionless and Tresca; linear multigrid without contact), "tnnmg" (truncated nonsmooth
         Newton multigrid: the fine nonlinear sweeps, one linear cycle for the truncated Newton
@@ -602,7 +630,12 @@ class ContactProblem:
         with it, 2 in the one that switched it off; result.extra["petrov_galerkin"] when on.
         `upwind_contact_sweep` ("nmg", and "linear"'s reference solve): every fine sweep of Algorithm 2
         followed by one more visit of the contact nodes, the sliding ones in the upwind order of the
-        Coulomb Jacobian; None: contact_sweep_upwind(). result.extra["upwind_contact_sweep"] is True when on."""
+        Coulomb Jacobian; None: contact_sweep_upwind(). result.extra["upwind_contact_sweep"] is True when on.
+        `projected_coarse_correction` ("nmg", and "linear"'s reference solve; any contact law): the coarse
+        correction without the inactive contact nodes' gap bounds, projected onto the gap and taken with
+        the exact frozen-energy line search; None: coarse_correction_projected() (on for rotated contact
+        frames). result.history["step_size"] holds its step; result.extra["projected_coarse_correction"] is
+        True when on."""
         if method not in METHODS:
             raise ValueError(f"method must be one of {METHODS}, got {method!r}")
         options = self._options(cycle, nu1, nu2)
@@ -652,17 +685,19 @@ class ContactProblem:
                 raise ValueError("omega_post needs a core built with it (issue 11, fifth part)")
             kw["omega_post"] = omega_post
         choices = {}
-        for name, value, default, where, takes, part in (
-                ("petrov_galerkin", petrov_galerkin, self.petrov_galerkin, self._adaptive_2d(),
-                 SOLVE_TAKES_PETROV_GALERKIN, "seventh"),
-                ("upwind_contact_sweep", upwind_contact_sweep, self.upwind_contact_sweep, self._adaptive_2d(),
-                 SOLVE_TAKES_UPWIND_CONTACT_SWEEP, "eleventh")):
-            on = self._cycle_choice(name, default if value is None else value, where)
+        for name, value, default, choose, where, takes, part in (
+                ("petrov_galerkin", petrov_galerkin, self.petrov_galerkin, self._cycle_choice, self._adaptive_2d(),
+                 SOLVE_TAKES_PETROV_GALERKIN, "issue 11, seventh part"),
+                ("upwind_contact_sweep", upwind_contact_sweep, self.upwind_contact_sweep, self._cycle_choice,
+                 self._adaptive_2d(), SOLVE_TAKES_UPWIND_CONTACT_SWEEP, "issue 11, eleventh part"),
+                ("projected_coarse_correction", projected_coarse_correction, self.projected_coarse_correction,
+                 self._switch, self.rotated_frames(), SOLVE_TAKES_PROJECTED_COARSE, "stop 27")):
+            on = choose(name, default if value is None else value, where)
             if on and method not in ("nmg", "linear") and value is not None:
                 raise ValueError(f"{name} is a choice of method 'nmg' (Algorithm 2), not {method!r}")
             if on and method == "nmg":
                 if not takes:
-                    raise ValueError(f"{name} needs a core built with it (issue 11, {part} part)")
+                    raise ValueError(f"{name} needs a core built with it ({part})")
                 kw[name] = True
             choices[name] = on
         if SOLVE_TAKES_CYCLE_OPTIONS:
@@ -716,6 +751,8 @@ class ContactProblem:
                                             "fallback_cycle": int(off[0]) + 1 if len(off) else None}
         if raw.get("upwind_contact_sweep"):  # only when set (issue 11, eleventh part)
             res.extra["upwind_contact_sweep"] = True
+        if raw.get("projected_coarse_correction"):  # only when set (stop 27)
+            res.extra["projected_coarse_correction"] = True
         if method == "fixed-point" and "outer_changes" in raw:
             res.extra["outer_changes"] = [float(c) for c in raw["outer_changes"]]
         if "threads" in raw:
