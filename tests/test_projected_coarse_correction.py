@@ -10,6 +10,8 @@ from level 2 to level 3."""
 import numpy as np
 import pytest
 
+from cycle_switch_checks import check_switch_refuses_bad_values
+
 from contactmg.checks import contact_conditions
 from contactmg.cork import cork_problem
 from contactmg.hertz import hertz_problem
@@ -65,10 +67,9 @@ def test_cork_cycles_do_not_grow_with_the_level():
 
 def test_bad_values():
     p = cork_problem(levels=2, friction=0.4)
+    check_switch_refuses_bad_values(p, "projected_coarse_correction")
     with pytest.raises(ValueError, match="projected_coarse_correction must be True or False"):
-        p.solve(projected_coarse_correction="yes")
-    with pytest.raises(ValueError, match="choice of method 'nmg'"):
-        p.solve("tnnmg", projected_coarse_correction=True)
+        p.solver.solve(projected_coarse_correction=1)  # the core refuses what is not a bool
     p.projected_coarse_correction = 1
     with pytest.raises(ValueError, match="projected_coarse_correction must be True or False"):
         p.solve()

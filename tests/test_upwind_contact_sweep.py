@@ -8,6 +8,8 @@ thread count, and laws without a moving bound are not touched."""
 import numpy as np
 import pytest
 
+from cycle_switch_checks import check_switch_refuses_bad_values
+
 from contactmg import sphere
 from contactmg.checks import contact_conditions
 from contactmg.hertz import hertz_adaptive_hierarchy, hertz_problem
@@ -47,12 +49,7 @@ def test_default_by_hierarchy_and_bad_values(adaptive9):
     # frictionless and Tresca: off by default (their coarse problems freeze no bound)
     assert not hertz_problem("triangle", 4, 0.0).contact_sweep_upwind()
     assert not tresca_problem(4).contact_sweep_upwind()
-    for bad in ("yes", 1, 0.0, [True]):
-        with pytest.raises(ValueError, match="upwind_contact_sweep must be True or False"):
-            p.solve(upwind_contact_sweep=bad)
-    for method in ("tnnmg", "fixed-point"):
-        with pytest.raises(ValueError, match="upwind_contact_sweep is a choice of method 'nmg'"):
-            p.solve(method, upwind_contact_sweep=True)
+    check_switch_refuses_bad_values(p, "upwind_contact_sweep")
     a.solve("tnnmg", threads=1, max_cycles=50)  # the problem's default does not stop the other methods
     # a bad problem attribute is refused where it is read: by a solve and by a load path
     p.upwind_contact_sweep = "no"
