@@ -159,7 +159,90 @@ py::dict result_to_dict(SolveResult& R, const ContactSolver<d>& S) {
   return out;
 }
 
-const char* cycle_name(CycleType t) { return t == CycleType::V ? "V" : t == CycleType::W ? "W" : "F"; }
+
+// --- the options dict: the field names of SolverOptions (solver/solver_options.hpp) -------------
+bool is_integer(py::handle v) { return !PyBool_Check(v.ptr()) && PyIndex_Check(v.ptr()); }
+bool is_real(py::handle v) { return !PyBool_Check(v.ptr()) && (PyFloat_Check(v.ptr()) || PyIndex_Check(v.ptr()) || py::isinstance(v, py::module_::import("numbers").attr("Real"))); }
+
+int int_option(py::handle v, const char* name) {
+  if (!is_integer(v)) throw InputError(std::string(name) + " must be an integer, got " + py::repr(v).cast<std::string>());
+  const long long x = v.cast<long long>();
+  if (x < std::numeric_limits<int>::min() || x > std::numeric_limits<int>::max())
+    throw InputError(std::string(name) + " is out of range: " + std::to_string(x));
+  return (int)x;
+}
+double real_option(py::handle v, const char* name) {
+  if (!is_real(v)) throw InputError(std::string(name) + " must be a number, got " + py::repr(v).cast<std::string>());
+  return py::float_(py::reinterpret_borrow<py::object>(v)).cast<double>();
+}
+bool bool_option(py::handle v, const char* name) {
+  if (!PyBool_Check(v.ptr()) && !py::isinstance(v, py::module_::import("numpy").attr("bool_")))
+    throw InputError(std::string(name) + " must be True or False, got " + py::repr(v).cast<std::string>());
+  return py::bool_(py::reinterpret_borrow<py::object>(v)).cast<bool>();
+}
+std::string str_option(py::handle v, const char* name) {
+  if (!py::isinstance<py::str>(v)) throw InputError(std::string(name) + " must be a string, got " + py::repr(v).cast<std::string>());
+  return v.cast<std::string>();
+}
+
+// `base` with the keys of `options` (a dict, or None) set; a key of value None keeps base's value.
+// An unknown key or a bad value raises InputError naming it; the result is validated.
+SolverOptions options_from_dict(py::handle options, SolverOptions o) {
+  if (!options.is_none()) {
+    if (!py::isinstance<py::dict>(options)) throw InputError("options must be a dict (SolverOptions field -> value)");
+    for (auto item : py::reinterpret_borrow<py::dict>(options)) {
+      if (!py::isinstance<py::str>(item.first)) throw InputError("an option name must be a string");
+      const std::string k = item.first.cast<std::string>();
+      const py::handle v = item.second;
+      const char* n = k.c_str();
+      if (v.is_none()) {
+        static const char* known[] = {"method", "cycle", "nu1", "nu2", "tol", "rtol", "max_cycles", "omega", "omega_post",
+                                      "fixed_point_tol", "fixed_point_max", "fixed_point_stall_window", "linear", "lines",
+                                      "threads", "ordering", "petrov_galerkin", "upwind_contact_sweep",
+                                      "projected_coarse_correction"};
+        if (std::find_if(std::begin(known), std::end(known), [&](const char* q) { return k == q; }) == std::end(known))
+          throw InputError("unknown option '" + k + "'");
+        continue;
+      }
+      if (k == "method") o.method = parse_method(str_option(v, n));
+      else if (k == "cycle") o.cycle = parse_cycle(str_option(v, n));
+      else if (k == "nu1") o.nu1 = int_option(v, n);
+      else if (k == "nu2") o.nu2 = int_option(v, n);
+      else if (k == "tol") o.tol = real_option(v, n);
+      else if (k == "rtol") o.rtol = real_option(v, n);
+      else if (k == "max_cycles") o.max_cycles = int_option(v, n);
+      else if (k == "omega") o.omega = real_option(v, n);
+      else if (k == "omega_post") o.omega_post = real_option(v, n);
+      else if (k == "fixed_point_tol") o.fixed_point_tol = real_option(v, n);
+      else if (k == "fixed_point_max") o.fixed_point_max = int_option(v, n);
+      else if (k == "fixed_point_stall_window") o.fixed_point_stall_window = int_option(v, n);
+      else if (k == "linear") o.linear = parse_linear_correction(str_option(v, n));
+      else if (k == "lines") o.lines = bool_option(v, n);
+      else if (k == "threads") o.threads = int_option(v, n);
+      else if (k == "ordering") o.ordering = parse_ordering(str_option(v, n));
+      else if (k == "petrov_galerkin") o.petrov_galerkin = bool_option(v, n);
+      else if (k == "upwind_contact_sweep") o.upwind_contact_sweep = bool_option(v, n);
+      else if (k == "projected_coarse_correction") o.projected_coarse_correction = bool_option(v, n);
+      else throw InputError("unknown option '" + k + "'");
+    }
+  }
+  o.validate();
+  return o;
+}
+
+// The options a solve used, as a dict of SolverOptions field names.
+py::dict options_to_dict(const SolverOptions& o) {
+  py::dict out;
+  out["method"] = method_name(o.method); out["cycle"] = cycle_name(o.cycle); out["nu1"] = o.nu1; out["nu2"] = o.nu2;
+  out["tol"] = o.tol; out["rtol"] = o.rtol; out["max_cycles"] = o.max_cycles; out["omega"] = o.omega;
+  out["omega_post"] = o.omega_post; out["fixed_point_tol"] = o.fixed_point_tol; out["fixed_point_max"] = o.fixed_point_max;
+  out["fixed_point_stall_window"] = o.fixed_point_stall_window; out["linear"] = linear_correction_name(o.linear);
+  out["lines"] = o.lines; out["threads"] = o.threads; out["ordering"] = ordering_name(o.ordering);
+  out["petrov_galerkin"] = o.petrov_galerkin; out["upwind_contact_sweep"] = o.upwind_contact_sweep;
+  out["projected_coarse_correction"] = o.projected_coarse_correction;
+  return out;
+}
+
 
 // A process-wide switch of the core (tests and benchmarks compare two paths in one process): sets it
 // unless given None, and returns the previous value.
@@ -224,9 +307,8 @@ void bind_dim(py::module_& m) {
   using CS = ContactSolver<d>;
   py::class_<CS>(m, ("ContactSolver" + sfx).c_str(), "Multigrid for linear elasticity with contact and friction")
       .def(py::init([](BM& A, DArr f, BArr fixed, DArr fixed_values, IArr contact_nodes, DArr normals, DArr gaps,
-                       DArr coefficients, const std::string& law, py::list transfers, const std::string& cycle, int nu1,
-                       int nu2, py::object frame_fixed, py::object frame_values, const std::string& ordering,
-                       bool take_matrix) {
+                       DArr coefficients, const std::string& law, py::list transfers, py::object options,
+                       py::object frame_fixed, py::object frame_values, bool take_matrix) {
              const py::ssize_t n = A.rows, nc = contact_nodes.size();
              require_shape(f, "load", {n, d});
              require_shape(fixed, "fixed", {n, d});
@@ -235,7 +317,7 @@ void bind_dim(py::module_& m) {
              require_shape(normals, "normals", {nc, d});
              require_shape(gaps, "gaps", {nc});
              require_shape(coefficients, "coefficients", {nc});
-             check_smoothing_steps(nu1, nu2);
+             const SolverOptions co = options_from_dict(options, SolverOptions());
              BArr ff;
              DArr fv;
              if (frame_fixed.is_none() != frame_values.is_none())
@@ -261,73 +343,28 @@ void bind_dim(py::module_& m) {
                  throw InputError("inconsistent prolongation arrays");
                T.push_back(std::move(tr));
              }
-             CycleOptions co;
-             co.cycle = parse_cycle(cycle);
-             co.nu1 = nu1;
-             co.nu2 = nu2;
-             co.ordering = parse_ordering(ordering);
              std::vector<Index> cn(contact_nodes.data(), contact_nodes.data() + nc);
              // take_matrix: the caller gives its matrix up (left empty), so the fine matrix is held once
              BM fine = take_matrix ? std::exchange(A, BM()) : BM(A);
-             return new CS(std::move(fine), f.data(), fixed.data(), fixed_values.data(), cn, normals.data(), gaps.data(), coefficients.data(),
-                           parse_law(law), std::move(T), co, frame_fixed.is_none() ? nullptr : ff.data(),
-                           frame_fixed.is_none() ? nullptr : fv.data(), co.ordering == Ordering::Coloured);
+             return new CS(std::move(fine), f.data(), fixed.data(), fixed_values.data(), cn, normals.data(), gaps.data(),
+                           coefficients.data(), parse_law(law), std::move(T), co, frame_fixed.is_none() ? nullptr : ff.data(),
+                           frame_fixed.is_none() ? nullptr : fv.data());
            }),
            py::arg("A"), py::arg("load"), py::arg("fixed"), py::arg("fixed_values"), py::arg("contact_nodes"),
            py::arg("normals"), py::arg("gaps"), py::arg("coefficients"), py::arg("law"), py::arg("transfers"),
-           py::arg("cycle") = "V", py::arg("nu1") = 3, py::arg("nu2") = 3, py::arg("frame_fixed") = py::none(),
-           py::arg("frame_values") = py::none(), py::arg("ordering") = "lexicographic", py::arg("take_matrix") = false,
-           "ordering coloured also stores every level but the coarsest by colours (each colour one contiguous range "
-           "of rows, so a coloured sweep streams memory; inputs and outputs keep the caller's numbering); "
-           "fixed/fixed_values: Dirichlet components in canonical axes (a contact node keeps its contact condition "
-           "in its free directions); frame_fixed/frame_values (nc, d): components fixed in the contact frames")
-      .def("solve", [](CS& S, py::object u0, double tol, double rtol, int max_cycles, bool fixed_point, double fp_tol,
-                       int fp_max, py::object reference, py::object cycle, py::object nu1, py::object nu2, py::object progress,
-                       bool tnnmg, py::object ordering, int threads, int fp_stall, py::object linear, py::object lines,
-                       py::object omega, py::object omega_post, py::object petrov_galerkin,
-                       py::object upwind_contact_sweep, py::object projected_coarse_correction) {
-             SolveOptions o;
-             if (fp_stall < 0) throw InputError("fixed_point_stall_window must be >= 0 (0: off)");
-             o.fixed_point_stall_window = fp_stall;
-             o.tol = tol; o.rtol = rtol; o.max_cycles = max_cycles; o.fixed_point_tol = fp_tol; o.fixed_point_max = fp_max;
-             if (!(tol >= 0) || !(rtol >= 0) || !(tol > 0 || rtol > 0)) throw InputError("tolerances must be >= 0, one of them > 0");
-             if (max_cycles < 1) throw InputError("max_cycles must be at least 1");
-             CycleOptions co = S.cycle_options();
-             if (!cycle.is_none()) co.cycle = parse_cycle(cycle.cast<std::string>());
-             if (!nu1.is_none()) co.nu1 = nu1.cast<int>();
-             if (!nu2.is_none()) co.nu2 = nu2.cast<int>();
-             if (!ordering.is_none()) co.ordering = parse_ordering(ordering.cast<std::string>());
-             if (!linear.is_none()) co.linear = parse_linear_correction(linear.cast<std::string>());
-             if (!lines.is_none()) co.lines = lines.cast<bool>();
-             if (!omega.is_none()) co.omega = omega.cast<double>();
-             if (!omega_post.is_none()) {
-               co.omega_post = omega_post.cast<double>();
-               check_omega(co.omega_post);
-             }
-             if (!petrov_galerkin.is_none()) {
-               if (!py::isinstance<py::bool_>(petrov_galerkin)) throw InputError("petrov_galerkin must be True or False");
-               co.petrov_galerkin = petrov_galerkin.cast<bool>();
-               if (co.petrov_galerkin && (tnnmg || fixed_point))
-                 throw InputError("petrov_galerkin is a choice of the monotone multigrid cycle (not tnnmg or fixed_point)");
-             }
-             if (!upwind_contact_sweep.is_none()) {
-               if (!py::isinstance<py::bool_>(upwind_contact_sweep)) throw InputError("upwind_contact_sweep must be True or False");
-               co.upwind_contact_sweep = upwind_contact_sweep.cast<bool>();
-               if (co.upwind_contact_sweep && (tnnmg || fixed_point))
-                 throw InputError("upwind_contact_sweep is a choice of the monotone multigrid cycle (not tnnmg or fixed_point)");
-             }
-             if (!projected_coarse_correction.is_none()) {
-               if (!py::isinstance<py::bool_>(projected_coarse_correction))
-                 throw InputError("projected_coarse_correction must be True or False");
-               co.projected_coarse_correction = projected_coarse_correction.cast<bool>();
-               if (co.projected_coarse_correction && (tnnmg || fixed_point))
-                 throw InputError("projected_coarse_correction is a choice of the monotone multigrid cycle (not tnnmg or fixed_point)");
-             }
-             check_smoothing_steps(co.nu1, co.nu2);
-             check_omega(co.omega);
-             if (threads < 0) throw InputError("threads must be >= 0 (0: all cores)");
+           py::arg("options") = py::dict(), py::arg("frame_fixed") = py::none(), py::arg("frame_values") = py::none(),
+           py::arg("take_matrix") = false,
+           "options: a dict of SolverOptions fields (method, cycle, nu1, nu2, tol, rtol, max_cycles, omega, omega_post, "
+           "fixed_point_tol, fixed_point_max, fixed_point_stall_window, linear, lines, threads, ordering, petrov_galerkin, "
+           "upwind_contact_sweep, projected_coarse_correction; a missing key takes the core's default, an unknown key or a "
+           "bad value raises ValueError): the options every solve starts from. ordering 'coloured' also stores every "
+           "level but the coarsest by colours (each colour one contiguous range of rows, so a coloured sweep streams "
+           "memory; inputs and outputs keep the caller's numbering). fixed/fixed_values: Dirichlet components in "
+           "canonical axes (a contact node keeps its contact condition in its free directions); frame_fixed/frame_values "
+           "(nc, d): components fixed in the contact frames; take_matrix: the solver takes A over (A is left empty)")
+      .def("solve", [](CS& S, py::object u0, py::object options, py::object progress, py::object reference) {
+             const SolverOptions co = options_from_dict(options, S.options());
              if (!progress.is_none() && !PyCallable_Check(progress.ptr())) throw InputError("progress must be callable or None");
-             if (tnnmg && fixed_point) throw InputError("tnnmg and fixed_point are two methods: choose one");
              DArr u;
              const double* up = nullptr;
              if (!u0.is_none()) {
@@ -336,10 +373,11 @@ void bind_dim(py::module_& m) {
                up = u.data();
              }
              DArr ref;
+             const double* refp = nullptr;
              if (!reference.is_none()) {
                ref = reference.cast<DArr>();
                require_shape(ref, "reference", {(py::ssize_t)S.num_nodes(), d});
-               o.reference = ref.data();
+               refp = ref.data();
              }
              // Ctrl-C and the progress callback need the GIL, taken only for them. A Python error
              // (KeyboardInterrupt, or one raised by the callback) is left set and stops the solve.
@@ -354,14 +392,15 @@ void bind_dim(py::module_& m) {
              bool interrupted = false;
              {
                py::gil_scoped_release release;
-               ThreadScope team(threads);
-               try { R = fixed_point ? S.solve_fixed_point(up, o, co) : tnnmg ? S.solve_tnnmg(up, o, co) : S.solve(up, o, co); }
+               ThreadScope team(co.threads);
+               try { R = S.solve(up, co, refp); }
                catch (const Interrupted&) { interrupted = true; }
              }
              S.monitor().interrupted = nullptr;
              S.monitor().progress = nullptr;
              if (interrupted) throw py::error_already_set();
              py::dict out = result_to_dict<d>(R, S);
+             out["options"] = options_to_dict(co);
              out["cycle_type"] = std::string(cycle_name(co.cycle)) + "(" + std::to_string(co.nu1) + "," + std::to_string(co.nu2) + ")";
              out["ordering"] = ordering_name(co.ordering);
              out["omega"] = co.omega;
@@ -369,32 +408,31 @@ void bind_dim(py::module_& m) {
              if (co.petrov_galerkin) out["petrov_galerkin"] = true;
              if (co.upwind_contact_sweep) out["upwind_contact_sweep"] = true;
              if (co.projected_coarse_correction) out["projected_coarse_correction"] = true;
-             if (tnnmg) { out["linear_correction"] = linear_correction_name(co.linear); out["lines"] = co.lines; }
-             out["threads"] = threads == 0 ? max_threads() : (have_openmp() ? threads : 1);
+             if (co.method == Method::Tnnmg) { out["linear_correction"] = linear_correction_name(co.linear); out["lines"] = co.lines; }
+             out["threads"] = co.threads == 0 ? max_threads() : (have_openmp() ? co.threads : 1);
              return out;
            },
-           py::arg("u0") = py::none(), py::arg("tol") = 1e-11, py::arg("rtol") = 0.0, py::arg("max_cycles") = 200,
-           py::arg("fixed_point") = false, py::arg("fixed_point_tol") = 1e-9, py::arg("fixed_point_max") = 100,
-           py::arg("reference") = py::none(), py::arg("cycle") = py::none(), py::arg("nu1") = py::none(),
-           py::arg("nu2") = py::none(), py::arg("progress") = py::none(), py::arg("tnnmg") = false,
-           py::arg("ordering") = py::none(), py::arg("threads") = 0, py::arg("fixed_point_stall_window") = 0,
-           py::arg("linear") = py::none(), py::arg("lines") = py::none(), py::arg("omega") = py::none(),
-           py::arg("omega_post") = py::none(), py::arg("petrov_galerkin") = py::none(),
-           py::arg("upwind_contact_sweep") = py::none(), py::arg("projected_coarse_correction") = py::none(),
-           "petrov_galerkin: in every cycle but the first of a Coulomb solve, the top coarse level also carries the sliding "
-           "nodes' Petrov-Galerkin coupling, with a fallback to the symmetric one (default False; issue 11, seventh and tenth parts); "
-           "upwind_contact_sweep: after every fine sweep of a Coulomb solve, one more visit of the contact nodes, the "
-           "sliding ones in the upwind order of the Coulomb Jacobian (default False; issue 11, eleventh part); "
-           "projected_coarse_correction: the coarse correction without the inactive contact nodes' gap bounds, projected onto "
-           "the gap and taken with the exact frozen-energy line search (default False; for rotated contact frames); "
-           "omega: over-relaxation of the unbounded block solves of every sweep (default 1, in (0, 2)); "
-           "omega_post: the same for the post-smoothing sweeps only (tnnmg: on its coarse levels; default: omega); "
-           "linear (tnnmg): its linear correction, 'pcg' (default), 'cycle' or 'coarse'; lines (tnnmg): line "
-           "smoothing in it where the level matrices have lines (default True); "
-           "tnnmg: truncated nonsmooth Newton multigrid steps instead of monotone multigrid cycles; "
-           "cycle, nu1, nu2, ordering override the constructor's for this solve; threads: 0 = all cores (the result "
-           "does not depend on it); progress(record: dict) is called after every "
-           "cycle (cycle, outer, correction_norm, energy, seconds, error, active, stick, slip, rebuilt)")
+           py::arg("u0") = py::none(), py::arg("options") = py::dict(), py::arg("progress") = py::none(),
+           py::arg("reference") = py::none(),
+           "A solve from u0 (n, d; None: 0) with the solver's options updated by `options` (a dict of SolverOptions "
+           "fields, as the constructor's). method: 'nmg' (monotone multigrid; Algorithm 2 for Coulomb), 'tnnmg' "
+           "(truncated nonsmooth Newton multigrid), 'fixed-point' (Algorithm 1, Coulomb only). progress(record: dict) is "
+           "called after every cycle (cycle, outer, correction_norm, energy, seconds, error, active, stick, slip, rebuilt, "
+           "step_size, frozen_decrease, linear_iterations, petrov_galerkin); reference (n, d): history['error'] records "
+           "||u - reference||_A after every cycle. threads: the result does not depend on it")
+      .def("set_load", [](CS& S, DArr load) {
+             require_shape(load, "load", {(py::ssize_t)S.num_nodes(), d});
+             S.set_load(load.data());
+           }, py::arg("load"),
+           "A new load (n, d), canonical, for the same matrix and data: a later solve is the one of a solver built with it")
+      .def("set_fixed_values", [](CS& S, DArr values) {
+             require_shape(values, "fixed_values", {(py::ssize_t)S.num_nodes(), d});
+             S.set_fixed_values(values.data());
+           }, py::arg("fixed_values"),
+           "New Dirichlet values (n, d), canonical, read on the fixed components (the same ones): a later solve is the one "
+           "of a solver built with them")
+      .def_property_readonly("options", [](const CS& S) { return options_to_dict(S.options()); },
+                             "the options every solve starts from")
       .def("smooth", [](CS& S, DArr u0, int sweeps, const std::string& ordering, int threads) {
              require_shape(u0, "u0", {(py::ssize_t)S.num_nodes(), d});
              if (sweeps < 0) throw InputError("sweeps must be >= 0");
@@ -442,7 +480,7 @@ void bind_dim(py::module_& m) {
       .def("linear_solve", [](CS& S, DArr r, int max_iterations, double reduction, bool lines, py::object cycle) {
              require_shape(r, "r", {(py::ssize_t)S.num_nodes(), d});
              if (max_iterations < 1) throw InputError("max_iterations must be at least 1");
-             CycleOptions co = S.cycle_options();
+             SolverOptions co = S.options();
              if (!cycle.is_none()) co.cycle = parse_cycle(cycle.cast<std::string>());
              co.lines = lines;
              std::vector<double> e, w;

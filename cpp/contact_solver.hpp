@@ -21,14 +21,16 @@ class ContactSolver {
     std::vector<double> weight;
   };
 
-  // renumber: store every level but the coarsest by colours (renumbering.hpp); what goes in and
-  // out stays in the caller's numbering.
+  // options: the solver's own options, the ones a solve starts from. Their ordering also decides
+  // the storage: coloured stores every level but the coarsest by colours (renumbering.hpp); what
+  // goes in and out stays in the caller's numbering.
   ContactSolver(BlockMatrix<d> A, const double* f, const std::uint8_t* fixed, const double* fixed_values,
                 const std::vector<Index>& contact_nodes, const double* normals, const double* gaps, const double* coefficients,
-                Law law, std::vector<Transfer> transfers, CycleOptions cyc, const std::uint8_t* frame_fixed = nullptr,
-                const double* frame_values = nullptr, bool renumber = false)
-      : ContactSolver(Stored(std::move(A), f, fixed, fixed_values, contact_nodes, std::move(transfers), renumber), normals, gaps,
-                      coefficients, law, cyc, frame_fixed, frame_values) {}
+                Law law, std::vector<Transfer> transfers, const SolverOptions& options, const std::uint8_t* frame_fixed = nullptr,
+                const double* frame_values = nullptr)
+      : ContactSolver(Stored(std::move(A), f, fixed, fixed_values, contact_nodes, std::move(transfers),
+                             validated(options).ordering == Ordering::Coloured),
+                      normals, gaps, coefficients, law, options, frame_fixed, frame_values) {}
 
   Index num_nodes() const { return P_.num_nodes(); }
   Index num_contact() const { return P_.num_contact(); }
@@ -50,7 +52,7 @@ class ContactSolver {
     }
     C_.set_rows_to_smooth(l, SweepOrder(std::move(rows)));
   }
-  const CycleOptions& cycle_options() const { return cyc_; }
+  const SolverOptions& options() const { return options_; }
   bool renumbered() const { return !order_.back().identity(); }
   Monitor& monitor() { return mon_; }
   std::size_t memory_bytes() const {
@@ -70,6 +72,13 @@ class ContactSolver {
     P_.set_slip_origin(order_.back().to_storage(u_prev, num_nodes(), d).data());
   }
   bool has_slip_origin() const { return P_.has_slip_origin(); }
+  // A load step: a new load / new Dirichlet values (canonical, the caller's numbering, n * d) for
+  // the same matrix, fixed components and contact data. A later solve is the one of a solver built
+  // with these data, bit for bit.
+  void set_load(const double* f) { P_.set_load(order_.back().to_storage(f, num_nodes(), d).data()); }
+  void set_fixed_values(const double* values) {
+    P_.set_fixed_values(order_.back().to_storage(values, num_nodes(), d).data());
+  }
   // Whether the cycles' workspace stays from one solve to the next (default). A solver made for one
   // solve turns it off: kept, it is 8 fine vectors alive while the result is written (+8 B/dof on
   // the peak of a level-9 solve in 2D) and 64 B/dof held after it.
@@ -91,47 +100,23 @@ class ContactSolver {
   // Full Galerkin rebuild for the current linearization (diagnostics: compare with the incremental one).
   void rebuild_coarse() { H_.rebuild(P_.matrix(), built_.mask.data(), built_.hessian); }
 
-  // The method of the solver's law from u0 (canonical; nullptr = 0): monotone multigrid cycles.
-  SolveResult solve(const double* u0, const SolveOptions& opt, const CycleOptions& cyc) {
-    return with_law(law_, [&](auto L) {
-      using Law = decltype(L);
-      start(u0);
-      P_.set_bounds_to_coefficients();
-      P_.set_smoothing_omega(cyc.omega);
-      SolveResult R;
-      {
-        MonotoneMultigridStep<d, Law> step(P_, H_, C_, built_, it_, cyc, fine_order(cyc.ordering), tied_.get(), workspace());
-        run_loop(step, stored(opt), mon_, R, 0);
-      }
-      finish<Law>(R);
-      return R;
-    });
-  }
-  SolveResult solve(const double* u0, const SolveOptions& opt) { return solve(u0, opt, cyc_); }
-
-  // Truncated nonsmooth Newton multigrid steps (steps/tnnmg_step.hpp) from u0, same stop rules.
-  SolveResult solve_tnnmg(const double* u0, const SolveOptions& opt, const CycleOptions& cyc) {
-    // its line search measures the friction term on u_T, not on the slip increment of a load step
-    if (P_.has_slip_origin())
-      throw InputError("method tnnmg does not take a slip origin (load paths): use nmg or fixed-point");
-    return with_law(law_, [&](auto L) {
-      using Law = decltype(L);
-      start(u0);
-      P_.set_bounds_to_coefficients();
-      P_.set_smoothing_omega(cyc.omega);
-      SolveResult R;
-      TnnmgStep<d, Law> step(P_, H_, C_, built_, it_, cyc, fine_cycle(), fine_order(cyc.ordering));
-      run_loop(step, stored(opt), mon_, R, 0);
-      finish<Law>(R);
-      return R;
-    });
+  // A solve by opt.method from u0 (canonical, the caller's numbering; nullptr = 0). reference: a
+  // canonical u* whose error each cycle records (nullptr: none).
+  SolveResult solve(const double* u0, const SolverOptions& opt, const double* reference = nullptr) {
+    opt.validate();
+    const double* ref = stored_reference(reference);
+    SolveResult R = opt.method == Method::FixedPoint ? solve_fixed_point(u0, opt, ref)
+                    : opt.method == Method::Tnnmg    ? solve_tnnmg(u0, opt, ref)
+                                                     : solve_nmg(u0, opt, ref);
+    std::vector<double>().swap(reference_);
+    return R;
   }
 
   // The linear correction of TNNMG on the linearization the coarse levels are built for (a fresh
   // solver: the Dirichlet mask alone, i.e. linear elasticity in the contact frames): PCG with the
   // truncated linear cycle for K w = M r (r in the frames). Returns w; `energies` the energy
   // 1/2 w^T K w - r^T M w after each iteration (0 first). For tests and diagnostics.
-  std::vector<double> linear_solve(const double* r, const CycleOptions& cyc, int max_iterations, double reduction,
+  std::vector<double> linear_solve(const double* r, const SolverOptions& cyc, int max_iterations, double reduction,
                                    std::vector<double>& energies) {
     TruncatedLinearCycle<d>& lin = fine_cycle();
     lin.set_linearization(built_.mask.data(), built_.hessian, cyc.lines);
@@ -156,19 +141,6 @@ class ContactSolver {
     return L;
   }
 
-  // Algorithm 1 (Coulomb only).
-  SolveResult solve_fixed_point(const double* u0, const SolveOptions& opt, const CycleOptions& cyc) {
-    if (law_ != Law::Coulomb) throw InputError("the fixed-point iteration needs a Coulomb friction law");
-    start(u0);
-    P_.set_smoothing_omega(cyc.omega);
-    SolveResult R;
-    MonotoneMultigridStep<d, law::Tresca> tresca(P_, H_, C_, built_, it_, cyc, fine_order(cyc.ordering), tied_.get(), workspace());
-    FixedPointStep<d> step(P_, tresca, it_);
-    run_fixed_point(step, stored(opt), mon_, R);
-    finish<law::Coulomb>(R);
-    return R;
-  }
-
   // `sweeps` nonlinear Gauss-Seidel sweeps of the solver's law from u0 (canonical), alternating
   // direction starting forward; returns the canonical iterate. A solution is a fixed point of this
   // map (the nodal rules keep every local solution), so it serves as an independent check.
@@ -187,6 +159,59 @@ class ContactSolver {
   }
 
  private:
+  static const SolverOptions& validated(const SolverOptions& o) {
+    o.validate();
+    return o;
+  }
+
+  // Monotone multigrid cycles of the solver's law.
+  SolveResult solve_nmg(const double* u0, const SolverOptions& cyc, const double* reference) {
+    return with_law(law_, [&](auto L) {
+      using Law = decltype(L);
+      start(u0);
+      P_.set_bounds_to_coefficients();
+      P_.set_smoothing_omega(cyc.omega);
+      SolveResult R;
+      {
+        MonotoneMultigridStep<d, Law> step(P_, H_, C_, built_, it_, cyc, fine_order(cyc.ordering), tied_.get(), workspace());
+        run_loop(step, cyc, reference, mon_, R, 0);
+      }
+      finish<Law>(R);
+      return R;
+    });
+  }
+
+  // Truncated nonsmooth Newton multigrid steps (steps/tnnmg_step.hpp), same stop rules.
+  SolveResult solve_tnnmg(const double* u0, const SolverOptions& cyc, const double* reference) {
+    // its line search measures the friction term on u_T, not on the slip increment of a load step
+    if (P_.has_slip_origin())
+      throw InputError("method tnnmg does not take a slip origin (load paths): use nmg or fixed-point");
+    return with_law(law_, [&](auto L) {
+      using Law = decltype(L);
+      start(u0);
+      P_.set_bounds_to_coefficients();
+      P_.set_smoothing_omega(cyc.omega);
+      SolveResult R;
+      TnnmgStep<d, Law> step(P_, H_, C_, built_, it_, cyc, fine_cycle(), fine_order(cyc.ordering));
+      run_loop(step, cyc, reference, mon_, R, 0);
+      finish<Law>(R);
+      return R;
+    });
+  }
+
+  // Algorithm 1 (Coulomb only).
+  SolveResult solve_fixed_point(const double* u0, const SolverOptions& cyc, const double* reference) {
+    if (law_ != Law::Coulomb) throw InputError("the fixed-point iteration needs a Coulomb friction law");
+    start(u0);
+    P_.set_smoothing_omega(cyc.omega);
+    SolveResult R;
+    MonotoneMultigridStep<d, law::Tresca> tresca(P_, H_, C_, built_, it_, cyc, fine_order(cyc.ordering), tied_.get(), workspace());
+    FixedPointStep<d> step(P_, tresca, it_);
+    run_fixed_point(step, cyc, reference, mon_, R);
+    finish<law::Coulomb>(R);
+    return R;
+  }
+
   CycleWorkspace* workspace() {
     if (cmg::keep_cycle_workspace() && keep_work_) return &work_;
     work_ = CycleWorkspace();  // not kept: what an earlier solve kept goes, the step allocates its own
@@ -264,14 +289,14 @@ class ContactSolver {
     return rank;
   }
 
-  ContactSolver(Stored S, const double* normals, const double* gaps, const double* coefficients, Law law, CycleOptions cyc,
+  ContactSolver(Stored S, const double* normals, const double* gaps, const double* coefficients, Law law, SolverOptions cyc,
                 const std::uint8_t* frame_fixed, const double* frame_values)
       : law_(law),
         P_(std::move(S.A), S.f.data(), S.fixed.data(), S.fixed_values.data(), S.contact_nodes, normals, gaps, coefficients,
            frame_fixed, frame_values),
         H_(transformed(std::move(S.P))),
         C_(H_),
-        cyc_(cyc),
+        options_(cyc),
         order_(std::move(S.order)) {
     // the lexicographic order of a renumbered level is the user's order (fine: made on first use)
     for (int l = 1; l + 1 < (int)order_.size(); ++l)
@@ -307,14 +332,11 @@ class ContactSolver {
     return fine_coloured_;
   }
 
-  // The options with the reference displacement (user's numbering) in storage order.
-  SolveOptions stored(const SolveOptions& opt) {
-    SolveOptions o = opt;
-    if (o.reference && !order_.back().identity()) {
-      reference_ = order_.back().to_storage(o.reference, num_nodes(), d);
-      o.reference = reference_.data();
-    }
-    return o;
+  // The reference displacement (the caller's numbering) in storage order.
+  const double* stored_reference(const double* reference) {
+    if (!reference || order_.back().identity()) return reference;
+    reference_ = order_.back().to_storage(reference, num_nodes(), d);
+    return reference_.data();
   }
 
   BlockMatrix<d> in_user_order(const BlockMatrix<d>& A, int level) const {
@@ -377,14 +399,13 @@ class ContactSolver {
       VecMap<d> ui(R.u.data() + order_.back().to_user(T.node(c)) * d);
       ui = T.block(c) * Vec<d>(ui);
     }
-    std::vector<double>().swap(reference_);
   }
 
   Law law_;
   ContactProblem<d> P_;
   GalerkinHierarchy<d> H_;
   CoarseCycle<d> C_;
-  CycleOptions cyc_;
+  SolverOptions options_;
   BuiltLinearization<d> built_;
   FineIterate<d> it_;
   CycleWorkspace work_;  // r, u_old, the Anderson slots: kept across solves (monotone_mg_step.hpp says why)

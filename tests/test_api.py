@@ -9,7 +9,6 @@ import pytest
 import contactmg as cm
 from contactmg import hertz
 from contactmg.frames import contact_frames, to_canonical, to_local
-from contactmg.problem import SOLVE_TAKES_CYCLE_OPTIONS
 
 
 @pytest.fixture(scope="module")
@@ -115,7 +114,6 @@ def test_constructor_cycle_keywords_are_still_defaults():
     assert not hasattr(cm, "layer")  # the alias of rectangle is gone
 
 
-@pytest.mark.skipif(not SOLVE_TAKES_CYCLE_OPTIONS, reason="needs a core that reports every cycle (issue 9 redesign)")
 def test_progress_is_called_after_every_cycle(problem):
     seen = []
     res = problem.solve(cycle="V", progress=seen.append)
@@ -129,12 +127,6 @@ def test_progress_is_called_after_every_cycle(problem):
     with pytest.raises(RuntimeError, match="enough"):
         problem.solve(progress=stop)
     assert problem.solve().converged  # the solver is usable after a stopped solve
-
-
-@pytest.mark.skipif(SOLVE_TAKES_CYCLE_OPTIONS, reason="this core reports every cycle")
-def test_progress_with_a_core_that_cannot_report_is_a_clear_error(problem):
-    with pytest.raises(ValueError, match="progress needs a core that reports every cycle"):
-        problem.solve(progress=print)
 
 
 def test_progress_must_be_callable(problem):

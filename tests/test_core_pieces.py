@@ -129,10 +129,10 @@ def test_cycle_options_per_solve(hertz):
     p = hertz
     s = p.solver
     default = s.solve()
-    v11 = s.solve(cycle="V", nu1=1, nu2=1)
+    v11 = s.solve(None, {"cycle": "V", "nu1": 1, "nu2": 1})
     ref = _core.ContactSolver2D(p.A, p.load, p.fixed, p.fixed_values, p.contact.nodes, p.contact.normals, p.contact.gaps,
-                                p.coefficients, p.law, [t.as_tuple() for t in p.hierarchy.transfers], "V", 1, 1,
-                                ordering=p.default_ordering)
+                                p.coefficients, p.law, [t.as_tuple() for t in p.hierarchy.transfers],
+                                {"cycle": "V", "nu1": 1, "nu2": 1, "ordering": p.default_ordering})
     # the same cycles as a solver built with V(1,1) (and the problem's ordering) (up to the round-off of incremental coarse updates,
     # which the Anderson mixing of settled Coulomb cycles amplifies: 1.4e-7 relative by cycle 10; where the
     # mixing continues across a state change -- V(1,1) here, from cycle 8 -- that can move the stop by a cycle)
@@ -148,9 +148,9 @@ def test_cycle_options_per_solve(hertz):
     np.testing.assert_array_equal(again["history"]["correction_norm"], default["history"]["correction_norm"])
     np.testing.assert_array_equal(again["u"], default["u"])
     with pytest.raises(ValueError, match="cycle type"):
-        s.solve(cycle="X")
+        s.solve(None, {"cycle": "X"})
     with pytest.raises(ValueError, match="smoothing steps"):
-        s.solve(nu1=0, nu2=0)
+        s.solve(None, {"nu1": 0, "nu2": 0})
 
 
 def test_progress_callback(hertz):
@@ -178,7 +178,7 @@ def test_progress_callback(hertz):
 # -- frames ------------------------------------------------------------------------------------
 def test_frames_are_returned_and_orthonormal(hertz):
     s = hertz.solver
-    r = s.solve(max_cycles=1)
+    r = s.solve(None, {"max_cycles": 1})
     Q = r["frames"]
     np.testing.assert_array_equal(Q, s.frames)
     assert Q.shape == (len(hertz.contact.nodes), 2, 2)

@@ -62,11 +62,11 @@ def test_one_step_path_on_an_adaptive_hierarchy_takes_the_problem_defaults():
 def test_zero_slip_origin_changes_nothing(problem):
     """A slip origin of zero is the reference configuration: the same iterates to the last bit
     (fresh core solvers each: a core's coarse matrices carry over between solves, round-off too)."""
-    ref = problem._new_core_solver(problem.law, problem.default_cycle).solve(None, tol=1e-11)
+    ref = problem._new_core_solver(problem.law, problem.default_cycle).solve(None, {"tol": 1e-11})
     core = problem._new_core_solver(problem.law, problem.default_cycle)
     core.set_slip_origin(np.zeros_like(ref["u"]))
     assert core.has_slip_origin
-    raw = core.solve(None, tol=1e-11)
+    raw = core.solve(None, {"tol": 1e-11})
     assert np.array_equal(raw["u"], ref["u"]) and raw["cycles"] == ref["cycles"]
 
 

@@ -13,9 +13,8 @@ from contactmg.hertz import hertz_adaptive_hierarchy, hertz_problem, hertz_probl
 from contactmg.hierarchy import MeshHierarchy
 from contactmg.material import Material
 from contactmg.obstacle import PlaneObstacle
-from contactmg.problem import SOLVE_TAKES_OMEGA_POST, ContactProblem, Dirichlet
+from contactmg.problem import ContactProblem, Dirichlet
 
-pytestmark = pytest.mark.skipif(not SOLVE_TAKES_OMEGA_POST, reason="core without omega_post")
 
 
 @pytest.fixture(scope="module")

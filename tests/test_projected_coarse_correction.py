@@ -15,9 +15,7 @@ from cycle_switch_checks import check_switch_refuses_bad_values
 from contactmg.checks import contact_conditions
 from contactmg.cork import cork_problem
 from contactmg.hertz import hertz_problem
-from contactmg.problem import SOLVE_TAKES_PROJECTED_COARSE
 
-pytestmark = pytest.mark.skipif(not SOLVE_TAKES_PROJECTED_COARSE, reason="core without projected_coarse_correction")
 
 
 def test_default_follows_the_contact_frames():
@@ -69,7 +67,7 @@ def test_bad_values():
     p = cork_problem(levels=2, friction=0.4)
     check_switch_refuses_bad_values(p, "projected_coarse_correction")
     with pytest.raises(ValueError, match="projected_coarse_correction must be True or False"):
-        p.solver.solve(projected_coarse_correction=1)  # the core refuses what is not a bool
+        p.solver.solve(None, {"projected_coarse_correction": 1})  # the core refuses what is not a bool
     p.projected_coarse_correction = 1
     with pytest.raises(ValueError, match="projected_coarse_correction must be True or False"):
         p.solve()

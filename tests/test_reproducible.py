@@ -20,7 +20,6 @@ import pytest
 from contactmg import _core, sphere
 from contactmg.checks import contact_conditions
 from contactmg.hertz import hertz_problem
-from contactmg.problem import SOLVE_TAKES_PETROV_GALERKIN
 
 
 def digest(r):
@@ -45,12 +44,11 @@ def test_hertz_2d_solves_repeat_bit_for_bit():
     assert first.converged
     for _ in range(2):
         same_bits(first, p.solve(threads=1))
-    if SOLVE_TAKES_PETROV_GALERKIN:
-        on = p.solve(threads=1, petrov_galerkin=True)
-        assert on.extra["petrov_galerkin"]["cycles"] > 0
-        same_bits(on, p.solve(threads=1, petrov_galerkin=True))
-        # a fresh problem's solve with it: the same bits as one after solves without it
-        same_bits(on, hertz_problem("triangle", 5, 2.0, coulomb_at_zero=True).solve(threads=1, petrov_galerkin=True))
+    on = p.solve(threads=1, petrov_galerkin=True)
+    assert on.extra["petrov_galerkin"]["cycles"] > 0
+    same_bits(on, p.solve(threads=1, petrov_galerkin=True))
+    # a fresh problem's solve with it: the same bits as one after solves without it
+    same_bits(on, hertz_problem("triangle", 5, 2.0, coulomb_at_zero=True).solve(threads=1, petrov_galerkin=True))
     same_bits(first, p.solve(threads=1))  # and back: the overlay left nothing behind
 
 
@@ -97,7 +95,7 @@ def run_script(seed, pg):
 
 
 def test_separate_processes_give_the_same_hashes():
-    runs = [run_script(seed, SOLVE_TAKES_PETROV_GALERKIN) for seed in (3, 7, 11)]
+    runs = [run_script(seed, True) for seed in (3, 7, 11)]
     assert runs[0] == runs[1] == runs[2]
     a = runs[0]
     assert a[0] == a[1] == a[3]  # every default solve the first one's bits, before and after the coupling's

@@ -94,9 +94,12 @@ def test_cli_method_tnnmg():
     assert d["method"] == "tnnmg" and d["converged"] and 5 <= d["cycles"] <= 30
 
 
-def test_core_refuses_two_methods_at_once(hertz_problems):
-    with pytest.raises(ValueError, match="choose one"):
-        hertz_problems["triangle", 0.4].solver.solve(None, fixed_point=True, tnnmg=True)
+def test_core_refuses_an_unknown_method_or_option(hertz_problems):
+    """One method per solve, named by the options' method; anything else is refused by name."""
+    with pytest.raises(ValueError, match=r"method: unknown method 'tnnmg\+fixed-point'"):
+        hertz_problems["triangle", 0.4].solver.solve(None, {"method": "tnnmg+fixed-point"})
+    with pytest.raises(ValueError, match="unknown option 'tnnmg'"):
+        hertz_problems["triangle", 0.4].solver.solve(None, {"tnnmg": True})
 
 
 def test_tnnmg_refuses_a_slip_origin():
@@ -108,6 +111,6 @@ def test_tnnmg_refuses_a_slip_origin():
     s = p._new_core_solver(p.law, p.default_cycle)
     s.set_slip_origin(np.zeros((p.mesh.num_points, 2)))
     with pytest.raises(ValueError, match="slip origin"):
-        s.solve(tnnmg=True)
+        s.solve(None, {"method": "tnnmg"})
     s.set_slip_origin(None)
-    assert s.solve(tnnmg=True)["converged"]
+    assert s.solve(None, {"method": "tnnmg"})["converged"]

@@ -14,11 +14,9 @@ from contactmg import sphere
 from contactmg.checks import contact_conditions
 from contactmg.hertz import hertz_adaptive_hierarchy, hertz_problem
 from contactmg.loadpath import LoadPath
-from contactmg.problem import SOLVE_TAKES_UPWIND_CONTACT_SWEEP
 
 from test_petrov_galerkin_coupling import tresca_problem
 
-pytestmark = pytest.mark.skipif(not SOLVE_TAKES_UPWIND_CONTACT_SWEEP, reason="core without upwind_contact_sweep")
 
 
 @pytest.fixture(scope="module")

@@ -8,98 +8,9 @@
 #include "mg/bound_restriction.hpp"
 #include "mg/hierarchy.hpp"
 #include "mg/line_smoother.hpp"
+#include "solver/solver_options.hpp"
 
 namespace cmg {
-
-enum class CycleType : int { V = 0, W = 1, F = 2 };
-
-// The linear correction of a TNNMG step (steps/tnnmg_step.hpp): the coarse cycle alone (the fine
-// level smoothed only by the nonlinear sweeps), one truncated linear cycle on the fine level
-// (mg/truncated_linear_cycle.hpp), or PCG preconditioned by that cycle (mg/pcg.hpp).
-enum class LinearCorrection : int { Coarse = 0, Cycle = 1, Pcg = 2 };
-
-inline LinearCorrection parse_linear_correction(const std::string& s) {
-  if (s == "coarse") return LinearCorrection::Coarse;
-  if (s == "cycle") return LinearCorrection::Cycle;
-  if (s == "pcg") return LinearCorrection::Pcg;
-  throw InputError("unknown linear correction '" + s + "' (expected coarse, cycle or pcg)");
-}
-inline const char* linear_correction_name(LinearCorrection c) {
-  return c == LinearCorrection::Coarse ? "coarse" : c == LinearCorrection::Cycle ? "cycle" : "pcg";
-}
-
-struct CycleOptions {
-  CycleType cycle = CycleType::V;
-  int nu1 = 3, nu2 = 3;
-  // Projected Gauss-Seidel sweeps on the coarsest level when its exact solve violates the bounds.
-  // Each sweep lowers the energy, so any number keeps the cycle monotone; on the Hertz benchmark
-  // (triangles levels 3-7, quads 3-6, F = 0.4 and 5) 10, 50, 200 and 2000 gave the same cycle
-  // counts, and 2000 (run to a relative change of 1e-14) cost 84 % of a quad level-3 solve.
-  int coarsest_max_sweeps = 50;
-  // Gauss-Seidel order of every sweep (fine nonlinear, coarse projected): lexicographic, or by
-  // colours of the block graph (rows of a colour on all threads).
-  // Lexicographic by default: on the shared 2-core machine of issue 15 the coloured sweep was
-  // slower on one thread (neighbours of one colour are scattered: worse cache use) and the second
-  // thread gained nothing under load (docs/scaling.md, benchmarks/parallel_bandwidth.py).
-  Ordering ordering = Ordering::Lexicographic;
-  // TNNMG only: its linear correction, and whether that correction smooths by lines
-  // (mg/line_smoother.hpp) on the levels whose matrix has lines (elsewhere lines are points).
-  LinearCorrection linear = LinearCorrection::Pcg;
-  bool lines = true;
-  // Over-relaxation of the unbounded block solves of every Gauss-Seidel sweep (fine level: nodes
-  // without contact; coarse levels: rows without bounds); 1 = plain Gauss-Seidel. Why: the rate of
-  // nodal block Gauss-Seidel on P1 elasticity levels off near 0.34 per F(3,3) cycle (Q1: 0.14), and
-  // a symmetric over-relaxed sweep (SSOR) costs the same and contracts by 0.22 with 1.4 on the
-  // adaptive Hertz levels (README, issue 11, third part). Any 0 < omega < 2 keeps each such step an
-  // energy decrease (a node's quadratic falls by (omega - omega^2 / 2) times its exact minimum), so
-  // the monotone cycles stay monotone; bounded rows and contact nodes keep their exact solves.
-  double omega = 1.0;
-  // Over-relaxation of the post-smoothing sweeps only (the backward ones after the coarse
-  // correction, fine and coarse levels; the coarsest level's sweeps keep omega); 0 = omega.
-  // Why (issue 11, fifth part): between two coarse corrections the smoother is nu2 backward sweeps
-  // then nu1 forward ones, and splitting the relaxation -- omega = 1 before, 1.8 after (or the
-  // reverse: the same spectrum) -- contracts P1 elasticity's linear V(3,3) by 0.14 on the unit square
-  // level 7 where the symmetric 1.3 gives 0.26, at the same cost (benchmarks/p1_smoother_modes.py).
-  // Each step keeps its energy decrease for any 0 < omega_post < 2, so the cycles stay monotone.
-  double omega_post = 0.0;
-  // Algorithm 2 (a law whose coarse problem freezes a bound): in every cycle but the first, level
-  // L-1's matrix also carries the sliding nodes' Petrov-Galerkin coupling, with a fallback to the
-  // symmetric one (steps/petrov_galerkin_coupling.hpp; issue 11, seventh and tenth parts). Off here:
-  // that coarse correction is not an energy descent; the Python problem turns it on where it pays
-  // (2D adaptive hierarchies).
-  bool petrov_galerkin = false;
-  // Algorithm 2: one more visit of the contact nodes after every fine sweep, the sliding ones
-  // in the upwind order of the Coulomb Jacobian (steps/upwind_contact_sweep.hpp; issue 11, eleventh
-  // part). Off here; the Python problem turns it on for Coulomb friction on 2D adaptive
-  // hierarchies.
-  bool upwind_contact_sweep = false;
-  // Algorithm 2 and the truncated monotone cycle: the coarse correction without the gap bounds of
-  // the inactive contact nodes, projected onto the gap at the fine level and taken with the exact
-  // line search of the frozen-bound energy (steps/monotone_mg_step.hpp). Where a contact frame is
-  // not a signed permutation of the axes, the monotone restriction turns a node's gap bound into
-  // bounds on every coarse component it touches, and a node closing on the obstacle holds back the
-  // coarse motions around it (the cork: 16 / 22 / 29 cycles on levels 2-4 without friction, 11 /
-  // 12 / 12 with this). Every step still lowers the frozen energy. Off here; the Python problem turns
-  // it on where a contact frame is rotated.
-  bool projected_coarse_correction = false;
-  double post_omega() const { return omega_post > 0 ? omega_post : omega; }
-};
-
-inline void check_omega(double omega) {
-  if (!(omega > 0 && omega < 2)) throw InputError("the over-relaxation omega must lie in (0, 2)");
-}
-
-inline CycleType parse_cycle(const std::string& s) {
-  if (s == "V") return CycleType::V;
-  if (s == "W") return CycleType::W;
-  if (s == "F") return CycleType::F;
-  throw InputError("unknown cycle type '" + s + "' (expected V, W or F)");
-}
-
-inline void check_smoothing_steps(int nu1, int nu2) {
-  if (nu1 < 0 || nu2 < 0 || nu1 + nu2 < 1 || nu1 > 100 || nu2 > 100)
-    throw InputError("smoothing steps nu1, nu2 must lie in 0..100 with nu1 + nu2 >= 1");
-}
 
 template <int d>
 class CoarseCycle {
@@ -142,7 +53,7 @@ class CoarseCycle {
   // residual r, the truncation mask and the fine correction bounds (ignored when !bounded).
   // lines: line Gauss-Seidel on the unbounded levels that have lines (a linear cycle; the monotone
   // cycle keeps its point sweeps).
-  void correction(const CycleOptions& opt, const double* r_fine, const std::uint8_t* mask, const NodeBounds& bounds,
+  void correction(const SolverOptions& opt, const double* r_fine, const std::uint8_t* mask, const NodeBounds& bounds,
                   bool bounded, double* w, Index n_fine, bool add = false, bool lines = false) {
     correction_of(opt, [&](Index i) { return Vec<d>(CVecMap<d>(r_fine + d * i)); }, mask, bounds, bounded, w, n_fine, add, lines);
   }
@@ -150,7 +61,7 @@ class CoarseCycle {
   // The same with the fine residual's rows given by fine_row(i) (a Vec<d>), in fine row order:
   // the monotone step forms them as they are restricted (steps/monotone_mg_step.hpp).
   template <class Row>
-  void correction_of(const CycleOptions& opt, Row&& fine_row, const std::uint8_t* mask, const NodeBounds& bounds, bool bounded,
+  void correction_of(const SolverOptions& opt, Row&& fine_row, const std::uint8_t* mask, const NodeBounds& bounds, bool bounded,
                      double* w, Index n_fine, bool add = false, bool lines = false) {
     const int top = (int)lv_.size() - 1;
     if (top < 0) {  // a single level: the smoother alone
@@ -218,7 +129,7 @@ class CoarseCycle {
       block_gs_sweep<d>(M.A, M.Dinv, L.b.data(), L.x.data(), forward, order, omega);
   }
 
-  void cycle(const CycleOptions& opt, int l, CycleType type) {
+  void cycle(const SolverOptions& opt, int l, CycleType type) {
     // A level below parallel_grains().level_rows rows, and every coarser one, runs on the calling thread: its
     // loops are too short to pay for waking the second thread (a W/F-cycle visits the small
     // levels most often). Every loop gives the same bits on any thread count, so this is a
@@ -255,7 +166,7 @@ class CoarseCycle {
     for (int s = 0; s < opt.nu2; ++s) sweep(l, false, order, omega_post_);
   }
 
-  void solve_coarsest(const CycleOptions& opt) {
+  void solve_coarsest(const SolverOptions& opt) {
     Vectors& L = lv_[0];
     const BlockMatrix<d>& A = H_.matrix(0);
     const Index n = (Index)L.x.size();
@@ -276,7 +187,7 @@ class CoarseCycle {
     double scale = 0;
     const SweepOrder lexicographic;
     const SweepOrder& all = opt.ordering == Ordering::Coloured ? coarsest_all_ : lexicographic;
-    for (int s = 0; s < opt.coarsest_max_sweeps; ++s) {
+    for (int s = 0; s < kCoarsestMaxSweeps; ++s) {
       L.r = L.x;
       sweep(0, s % 2 == 0, all);
       double change = 0;

@@ -82,7 +82,7 @@ inline Vec<d> local_rhs(const BlockMatrix<d>& A, const double* x, const double* 
   return A.with_values([&](const auto* vals) { return local_rhs<d>(A, vals, x, b, i); });
 }
 
-// x_i <- x_i + omega (y - x_i), y the exact block solve (omega = 1: y; CycleOptions::omega says why)
+// x_i <- x_i + omega (y - x_i), y the exact block solve (omega = 1: y; SolverOptions::omega says why)
 template <int d>
 inline void relaxed_assign(VecMap<d>& xi, const Vec<d>& y, double omega) {
   if (omega == 1.0) xi = y;

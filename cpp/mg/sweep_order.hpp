@@ -6,17 +6,9 @@
 #pragma once
 #include "block_matrix.hpp"
 #include "parallel.hpp"
+#include "solver/solver_options.hpp"
 
 namespace cmg {
-
-enum class Ordering : int { Lexicographic = 0, Coloured = 1 };
-
-inline Ordering parse_ordering(const std::string& s) {
-  if (s == "lexicographic") return Ordering::Lexicographic;
-  if (s == "coloured" || s == "colored") return Ordering::Coloured;
-  throw InputError("unknown ordering '" + s + "' (expected lexicographic or coloured)");
-}
-inline const char* ordering_name(Ordering o) { return o == Ordering::Coloured ? "coloured" : "lexicographic"; }
 
 class SweepOrder {
  public:

@@ -62,7 +62,7 @@ class TruncatedLinearCycle {
   }
 
   // w = B r (r: the masked residual), one cycle from w = 0
-  void apply(CoarseCycle<d>& C, const CycleOptions& opt, const double* r, double* w) {
+  void apply(CoarseCycle<d>& C, const SolverOptions& opt, const double* r, double* w) {
     const Index n = (Index)mask_.size();
     std::fill(w, w + n, 0.0);
     for (int s = 0; s < opt.nu1; ++s) gs_.sweep(A_, mask_.data(), r, w, true);

@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstdio>
 #include "solver/monitor.hpp"
+#include "solver/solver_options.hpp"
 
 namespace cmg {
 
@@ -26,8 +27,9 @@ inline std::string fmt3(double v) {
 }
 
 // Returns whether it converged; R gets the history, the cycle count and the status.
+// reference: the canonical u* (storage order) whose error ||u - u*||_A each cycle records, or nullptr.
 template <class Step>
-bool run_loop(Step& step, const SolveOptions& opt, Monitor& mon, SolveResult& R, int outer) {
+bool run_loop(Step& step, const SolverOptions& opt, const double* reference, Monitor& mon, SolveResult& R, int outer) {
   double first = -1;
   R.status = "no convergence in " + std::to_string(opt.max_cycles) + " cycles";
   for (int it = 1; it <= opt.max_cycles; ++it) {
@@ -38,12 +40,12 @@ bool run_loop(Step& step, const SolveOptions& opt, Monitor& mon, SolveResult& R,
     rec.outer = outer;
     step.record(rec);
     rec.seconds = mon.elapsed();
-    if (opt.reference) mon.untimed([&] { rec.error = step.error_against(opt.reference); });
+    if (reference) mon.untimed([&] { rec.error = step.error_against(reference); });
     R.history.push_back(rec);
     mon.report(rec);
     const double cn = rec.correction_norm;
     if (first < 0) first = cn;
-    if (!std::isfinite(cn) || (cn > opt.divergence_factor * first && first > 0)) {
+    if (!std::isfinite(cn) || (cn > kDivergenceFactor * first && first > 0)) {
       R.status = std::isfinite(cn)
                      ? "diverged: correction norm " + fmt3(cn) + " at cycle " + std::to_string(it) + ", " + fmt3(cn / first) +
                            " times the first"

@@ -1,25 +1,10 @@
-// What a solve is asked (SolveOptions) and what it returns (SolveResult with its per-cycle history).
+// What a solve returns: SolveResult with its per-cycle history.
 #pragma once
 #include <limits>
 #include <string>
 #include "common.hpp"
 
 namespace cmg {
-
-struct SolveOptions {
-  double tol = 1e-11;    // stop when ||u^{k+1} - u^k||_A <= tol
-  double rtol = 0;       // ... or <= rtol * (the first cycle's correction norm)
-  int max_cycles = 200;  // per solve (per Tresca solve inside the fixed point)
-  double fixed_point_tol = 1e-9;
-  int fixed_point_max = 100;
-  // Algorithm 1 stops as not converging when its relative change of s_n has not fallen below the
-  // one of `fixed_point_stall_window` outer iterations before (0: never; it runs to fixed_point_max).
-  // A contraction lowers the change every iteration; one that does not fall over several
-  // iterations is the paper's "no conv." (large F, small h), found without running to the cap.
-  int fixed_point_stall_window = 0;
-  double divergence_factor = 1e8;  // a correction this much larger than the first one: diverged
-  const double* reference = nullptr;  // canonical u*: record ||u - u*||_A per cycle (costs a matvec)
-};
 
 struct CycleRecord {
   int cycle = 0, outer = 0;
@@ -32,7 +17,7 @@ struct CycleRecord {
   double step_size = std::numeric_limits<double>::quiet_NaN();
   double frozen_decrease = std::numeric_limits<double>::quiet_NaN();
   int linear_iterations = 0;  // TNNMG: preconditioner applications (linear cycles) of the correction
-  // Algorithm 2 with CycleOptions::petrov_galerkin: 1 where the top coarse level carried the
+  // Algorithm 2 with SolverOptions::petrov_galerkin: 1 where the top coarse level carried the
   // sliding nodes' coupling, 2 where it did and the fallback then switched it off, else 0
   int petrov_galerkin = 0;
 };

@@ -16,10 +16,10 @@ class FixedPointStep {
   }
 
   // One outer iteration k: returns false when its Tresca solve failed (R.status says why).
-  bool iterate(int k, const SolveOptions& opt, Monitor& mon, SolveResult& R) {
+  bool iterate(int k, const SolverOptions& opt, const double* reference, Monitor& mon, SolveResult& R) {
     for (Index c = 0; c < P_.num_contact(); ++c) P_.set_bound(c, P_.coefficient(c) * std::abs(sn_prev_[c]));
     R.outer_iterations = k;
-    if (!run_loop(tresca_, opt, mon, R, k)) {
+    if (!run_loop(tresca_, opt, reference, mon, R, k)) {
       R.status = "the Tresca solve of outer iteration " + std::to_string(k) + " did not converge: " + R.status;
       R.converged = false;
       return false;
@@ -53,9 +53,9 @@ class FixedPointStep {
 
 // The outer loop of Algorithm 1.
 template <int d>
-void run_fixed_point(FixedPointStep<d>& step, const SolveOptions& opt, Monitor& mon, SolveResult& R) {
+void run_fixed_point(FixedPointStep<d>& step, const SolverOptions& opt, const double* reference, Monitor& mon, SolveResult& R) {
   for (int k = 1; k <= opt.fixed_point_max; ++k) {
-    if (!step.iterate(k, opt, mon, R)) return;
+    if (!step.iterate(k, opt, reference, mon, R)) return;
     R.outer_changes.push_back(step.relative_change());
     if (step.fixed(opt.fixed_point_tol)) {
       R.converged = true;

@@ -68,7 +68,7 @@ class MonotoneMultigridStep {
 
  public:
   MonotoneMultigridStep(const ContactProblem<d>& P, GalerkinHierarchy<d>& H, CoarseCycle<d>& C, BuiltLinearization<d>& built,
-                        FineIterate<d>& it, const CycleOptions& opt, const SweepOrder& fine_order = SweepOrder(),
+                        FineIterate<d>& it, const SolverOptions& opt, const SweepOrder& fine_order = SweepOrder(),
                         TiedCorrection<d>* tied = nullptr, CycleWorkspace* work = nullptr)
       : P_(P), H_(H), C_(C), built_(built), it_(it), opt_(opt), order_(fine_order), tied_(tied), ws_(work ? *work : own_),
         r_(ws_.r), old_(ws_.old), anderson_(ws_.anderson), pg_(H, opt.petrov_galerkin && L::coarse_freezes_bound),
@@ -365,7 +365,7 @@ class MonotoneMultigridStep {
   CoarseCycle<d>& C_;
   BuiltLinearization<d>& built_;
   FineIterate<d>& it_;
-  CycleOptions opt_;
+  SolverOptions opt_;
   const SweepOrder& order_;  // of the fine nonlinear sweeps
   TiedCorrection<d>* tied_;   // or nullptr
   CycleWorkspace own_;  // used when the caller keeps none (then freed with the step)
@@ -381,7 +381,7 @@ class MonotoneMultigridStep {
   UpwindContactSweep<d, L> upwind_;
   std::vector<std::pair<Index, Vec<d>>> coupling_;  // sliding node -> w (bound_coupling), when wanted
   bool first_ = true;
-  // the projected coarse correction (CycleOptions::projected_coarse_correction): its direction, the
+  // the projected coarse correction (SolverOptions::projected_coarse_correction): its direction, the
   // frozen bounds, the upper bounds without the gaps, the line search and its last step
   const bool projected_;
   std::vector<double> w_, bound_, hi_open_;

@@ -18,7 +18,7 @@ inline bool& fine_sweep_generic() {
 template <int d, class L>
 struct NonlinearGaussSeidel {
   // omega: the over-relaxation of the rows without contact (< 0: the problem's smoothing_omega();
-  // CycleOptions::omega_post gives the post-smoothing sweeps their own).
+  // SolverOptions::omega_post gives the post-smoothing sweeps their own).
   static void sweep(const ContactProblem<d>& P, double* u, bool forward, const SweepOrder& order = SweepOrder(),
                     double omega = -1.0) {
     if (!(omega > 0)) omega = P.smoothing_omega();

@@ -1,5 +1,5 @@
 // The Petrov-Galerkin coupling of the sliding nodes on the top coarse level, in every cycle of Algorithm 2
-// but the first (issue 11, seventh and tenth parts; CycleOptions::petrov_galerkin, off in the core; the
+// but the first (issue 11, seventh and tenth parts; SolverOptions::petrov_galerkin, off in the core; the
 // Python problem turns it on for Coulomb friction on 2D adaptive hierarchies). Until stop 25 it waited for
 // a settled contact state (the truncation of the cycle before): that left the settling cycles at the frozen
 // bound's slow rate (adaptive level 11, F = 2: 16 cycles against 13 in every cycle).

@@ -26,7 +26,7 @@ class TiedCorrection {
   }
 
   // u <- u + P~ c for the residual of u (one fine product), c one coarse cycle of `opt`.
-  void apply(const ContactProblem<d>& P, const CycleOptions& opt, double* u) {
+  void apply(const ContactProblem<d>& P, const SolverOptions& opt, double* u) {
     const std::vector<double>& f = P.load();
     P.matrix().multiply(u, r_.data());
     parallel_for((Index)r_.size(), [&](Index k) { r_[k] = f[k] - r_[k]; });

@@ -5,7 +5,7 @@
 //      sticking tangentials, friction gradient (and in 3D Hessian) of the sliding nodes with the
 //      bound s_p of u frozen, exactly as Algorithm 2 builds its coarse problem;
 //   3. the linear correction w of that truncated Newton system -- no coarse obstacles -- as chosen
-//      by CycleOptions::linear: PCG preconditioned by the truncated linear cycle on the fine level
+//      by SolverOptions::linear: PCG preconditioned by the truncated linear cycle on the fine level
 //      (the default: line sweeps where the matrix has lines, mg/truncated_linear_cycle.hpp and
 //      mg/pcg.hpp), one such cycle, or one cycle of the coarse levels alone (w = P~ c: the fine
 //      level then smoothed only by the nonlinear sweeps, as first built);
@@ -45,7 +45,7 @@ class TnnmgStep {
 
  public:
   TnnmgStep(const ContactProblem<d>& P, GalerkinHierarchy<d>& H, CoarseCycle<d>& C, BuiltLinearization<d>& built,
-            FineIterate<d>& it, const CycleOptions& opt, TruncatedLinearCycle<d>& fine_cycle,
+            FineIterate<d>& it, const SolverOptions& opt, TruncatedLinearCycle<d>& fine_cycle,
             const SweepOrder& fine_order = SweepOrder())
       : P_(P), H_(H), C_(C), built_(built), it_(it), opt_(opt), lin_(fine_cycle), order_(fine_order),
         checks_(P, H, C, built, it, opt, fine_order) {
@@ -182,7 +182,7 @@ class TnnmgStep {
   CoarseCycle<d>& C_;
   BuiltLinearization<d>& built_;
   FineIterate<d>& it_;
-  CycleOptions opt_;
+  SolverOptions opt_;
   TruncatedLinearCycle<d>& lin_;
   // energy record, error and the sweep check are the monotone step's (same iterate, same law)
   const SweepOrder& order_;  // of the fine nonlinear sweeps

@@ -1,6 +1,6 @@
 // One more Gauss-Seidel visit of the contact nodes after every fine sweep of Algorithm 2, the
 // sliding ones in the upwind order of the Coulomb Jacobian (issue 11, eleventh part;
-// CycleOptions::upwind_contact_sweep, off in the core; the Python problem turns it on for Coulomb
+// SolverOptions::upwind_contact_sweep, off in the core; the Python problem turns it on for Coulomb
 // friction on 2D adaptive hierarchies).
 //
 // Why: a sliding node's tangential row is that of J = K + w_p e_pn^T K (w_p = -F t, t the slip

@@ -20,7 +20,7 @@ from typing import Callable, List, Optional, Sequence
 
 import numpy as np
 
-from .problem import INT32_MAX, METHODS, SOLVE_TAKES_CYCLE_OPTIONS, SOLVE_TAKES_OMEGA, SOLVE_TAKES_OMEGA_POST, ContactProblem, Dirichlet, \
+from .problem import INT32_MAX, METHODS, ContactProblem, Dirichlet, \
     assemble_load, dirichlet_arrays
 from .results import SLIP, STICK, ContactResult
 
@@ -140,13 +140,10 @@ class LoadPath:
                 or not 1 <= max_cycles <= INT32_MAX:
             raise ValueError(f"max_cycles must be an integer in 1..{INT32_MAX}, got {max_cycles!r}")
         options = p._options(cycle, nu1, nu2)
-        kw = dict(tol=float(tol), max_cycles=int(max_cycles), fixed_point=method == "fixed-point")
-        if SOLVE_TAKES_CYCLE_OPTIONS:
-            kw.update(cycle=options.cycle, nu1=options.nu1, nu2=options.nu2)
-        if SOLVE_TAKES_OMEGA:
-            kw["omega"] = p.smoothing_omega()
+        kw = dict(tol=float(tol), max_cycles=int(max_cycles), method=method, cycle=options.cycle, nu1=options.nu1,
+                  nu2=options.nu2, omega=p.smoothing_omega())
         # the problem's own choices, as in its single solves (a one-step path is one solve, bit for bit)
-        if SOLVE_TAKES_OMEGA_POST and p.post_smoothing_omega() is not None:
+        if p.post_smoothing_omega() is not None:
             kw["omega_post"] = p.post_smoothing_omega()
         kw.update(p.cycle_switches(method))
         t_path = time.perf_counter()
@@ -160,7 +157,7 @@ class LoadPath:
             if previous is not None:
                 core.set_slip_origin(previous)
             build = time.perf_counter() - t0
-            raw = core.solve(previous if warm_start else None, **kw)
+            raw = core.solve(previous if warm_start else None, kw)
             res = ContactResult.from_raw(p, raw, method)
             res.setup_seconds = p.assembly_seconds + build  # hierarchy, assembly and this step's core build
             res.extra.update(step=k + 1, parameter=data.parameter, build_seconds=build,

@@ -23,29 +23,8 @@ VectorField = Union[Sequence[float], np.ndarray, Callable[[np.ndarray], np.ndarr
 METHODS = ("nmg", "fixed-point", "linear", "tnnmg")
 CYCLES = ("V", "W", "F")
 INT32_MAX = 2 ** 31 - 1  # the core counts cycles in a C int
-# The redesigned core (issue 9) takes cycle, nu1, nu2 and a progress callback per solve; an older
-# core takes the cycle at construction only, and then one core solver is kept per cycle choice.
-SOLVE_TAKES_CYCLE_OPTIONS = "progress" in (_core.ContactSolver2D.solve.__doc__ or "")
-# Issue 15: threads= and ordering= per solve (coloured Gauss-Seidel sweeps).
-SOLVE_TAKES_THREADS = "threads" in (_core.ContactSolver2D.solve.__doc__ or "")
-# Algorithm 1's stop when it does not contract (issue 11)
-SOLVE_TAKES_FIXED_POINT_STALL = "fixed_point_stall_window" in (_core.ContactSolver2D.solve.__doc__ or "")
 ORDERINGS = ("coloured", "lexicographic")
-CORE_TAKES_MATRIX = "take_matrix" in (_core.ContactSolver2D.__init__.__doc__ or "")
-# Issue 14: the linear correction of tnnmg per solve (PCG / one cycle / coarse levels only; line smoothing)
-SOLVE_TAKES_LINEAR = "linear (tnnmg)" in (_core.ContactSolver2D.solve.__doc__ or "")
 LINEAR_CORRECTIONS = ("pcg", "cycle", "coarse")
-# Issue 11: over-relaxation (omega) of the unbounded block solves of every Gauss-Seidel sweep per solve
-SOLVE_TAKES_OMEGA = "omega:" in (_core.ContactSolver2D.solve.__doc__ or "")
-# Issue 11, fifth part: a separate over-relaxation of the post-smoothing sweeps (off by default)
-SOLVE_TAKES_OMEGA_POST = "omega_post:" in (_core.ContactSolver2D.solve.__doc__ or "")
-# Issue 11, seventh and tenth parts: the sliding nodes' Petrov-Galerkin coupling on level L-1 (solve(petrov_galerkin=...))
-SOLVE_TAKES_PETROV_GALERKIN = "petrov_galerkin:" in (_core.ContactSolver2D.solve.__doc__ or "")
-# Issue 11, eleventh part: one more visit of the contact nodes after every fine sweep, the sliding ones
-# upwind (solve(upwind_contact_sweep=...))
-SOLVE_TAKES_UPWIND_CONTACT_SWEEP = "upwind_contact_sweep:" in (_core.ContactSolver2D.solve.__doc__ or "")
-# the projected coarse correction for rotated contact frames (solve(projected_coarse_correction=...))
-SOLVE_TAKES_PROJECTED_COARSE = "projected_coarse_correction:" in (_core.ContactSolver2D.solve.__doc__ or "")
 # The default omega by cell type. Simplices: 1.3 (symmetric SOR). Nodal block Gauss-Seidel on P1
 # elasticity levels off near 0.34 per F(3,3) cycle on the adaptive Hertz levels (Q1: 0.14 on the
 # unit square); over-relaxed it contracts by 0.26 / 0.235 / 0.216 / 0.216 at level 11 with omega
@@ -62,8 +41,7 @@ DEFAULT_OMEGA_POST_ADAPTIVE = {"triangle": 1.5}
 # Issue 15: a core solver built for the coloured order stores its levels by colours (each colour a
 # contiguous range: the coloured sweep streams memory). The default ordering of a problem's solves,
 # chosen by measurement (docs/scaling.md, benchmarks/parallel_bandwidth.py).
-CORE_RENUMBERS = hasattr(_core.ContactSolver2D, "renumbered")
-DEFAULT_ORDERING = "coloured" if CORE_RENUMBERS else "lexicographic"
+DEFAULT_ORDERING = "coloured"
 
 
 def tag_tuple(tags, name: str) -> tuple:
@@ -402,12 +380,10 @@ class ContactProblem:
         c = self.contact
         values = self.fixed_values if fixed_values is None else fixed_values  # a load path's step: its own values
         args = (self.load if load is None else load, self.fixed, values, c.nodes, c.normals,
-                c.gaps, self.coefficients, law, [t.as_tuple() for t in self.hierarchy.transfers], options.cycle,
-                options.nu1, options.nu2)
+                c.gaps, self.coefficients, law, [t.as_tuple() for t in self.hierarchy.transfers],
+                dict(cycle=options.cycle, nu1=options.nu1, nu2=options.nu2, ordering=self.default_ordering))
         kw = dict(frame_fixed=frame_fixed, frame_values=frame_values)
-        if CORE_RENUMBERS:
-            kw["ordering"] = self.default_ordering
-        if not (CORE_TAKES_MATRIX and take_matrix):
+        if not take_matrix:
             return cls(self.A, *args, **kw)
         # The core takes the assembled matrix over (left empty here): one fine matrix in memory.
         A, self._A = self.A, None
@@ -503,11 +479,11 @@ class ContactProblem:
         kw = {}
         if method != "nmg":
             return kw
-        if self.petrov_galerkin_coupling() and SOLVE_TAKES_PETROV_GALERKIN:
+        if self.petrov_galerkin_coupling():
             kw["petrov_galerkin"] = True
-        if self.contact_sweep_upwind() and SOLVE_TAKES_UPWIND_CONTACT_SWEEP:
+        if self.contact_sweep_upwind():
             kw["upwind_contact_sweep"] = True
-        if self.coarse_correction_projected() and SOLVE_TAKES_PROJECTED_COARSE:
+        if self.coarse_correction_projected():
             kw["projected_coarse_correction"] = True
         return kw
 
@@ -572,8 +548,8 @@ class ContactProblem:
         return out
 
     def _solver_key(self, options: CycleOptions) -> CycleOptions:
-        # a core that takes the cycle per solve serves every choice with the solver of the defaults
-        return self.default_cycle if SOLVE_TAKES_CYCLE_OPTIONS else options
+        # the core takes the cycle per solve: the solver of the defaults serves every choice
+        return self.default_cycle
 
     @property
     def solver(self):
@@ -609,9 +585,8 @@ class ContactProblem:
         choice). With `error_reference` (a displacement u*), history["error"] records ||u - u*||_A
         after every cycle (one extra matrix product per cycle, kept out of the timings).
         `progress(record)` is called after every cycle with a dict (cycle, outer,
-        correction_norm, energy, seconds, error, active, stick, slip, rebuilt) by a core that
-        reports cycles (SOLVE_TAKES_CYCLE_OPTIONS); an exception it raises stops the solve. With an
-        older core, which runs all cycles in one call, asking for it is an error. `threads`: the
+        correction_norm, energy, seconds, error, active, stick, slip, rebuilt); an exception it
+        raises stops the solve. `threads`: the
         threads of the sweeps, products and norms (0: all cores); the result is the same bit for
         bit on any count, and in every solve of the problem with the same arguments (each starts
         from the coarse levels as the core solver built them: a later solve pays one full coarse
@@ -659,68 +634,48 @@ class ContactProblem:
             raise ValueError(f"linear must be one of {LINEAR_CORRECTIONS}, got {linear!r}")
         if lines is not None and not isinstance(lines, (bool, np.bool_)):
             raise ValueError(f"lines must be True or False, got {lines!r}")
-        if ordering is None and CORE_RENUMBERS:
+        if ordering is None:
             ordering = self.default_ordering
         kw = dict(tol=float(tol), rtol=float(rtol), max_cycles=int(max_cycles), fixed_point_tol=float(fixed_point_tol),
-                  fixed_point_max=int(fixed_point_max), reference=error_reference)
-        if SOLVE_TAKES_THREADS:
-            kw.update(threads=int(threads), ordering=ordering)
+                  fixed_point_max=int(fixed_point_max), threads=int(threads), ordering=ordering)
         if (isinstance(fixed_point_stall_window, (bool, np.bool_)) or not isinstance(fixed_point_stall_window, (int, np.integer))
                 or not 0 <= fixed_point_stall_window <= INT32_MAX):
             raise ValueError(f"fixed_point_stall_window must be an integer >= 0, got {fixed_point_stall_window!r}")
         if fixed_point_stall_window:
-            if not SOLVE_TAKES_FIXED_POINT_STALL:
-                raise ValueError("fixed_point_stall_window needs a core built with it (issue 11)")
             kw["fixed_point_stall_window"] = int(fixed_point_stall_window)
         if omega_post is None:  # a pre-smoothing omega given here is the post-smoothing's too
             omega_post = self.post_smoothing_omega() if omega is None else self.smoother_omega_post
         omega = self.smoothing_omega() if omega is None else _checked_omega(omega)
-        if SOLVE_TAKES_OMEGA:
-            kw["omega"] = omega
-        elif omega != 1.0:
-            raise ValueError("omega needs a core with over-relaxed sweeps (issue 11)")
+        kw["omega"] = omega
         if omega_post is not None:
-            omega_post = _checked_omega(omega_post, "omega_post")
-            if not SOLVE_TAKES_OMEGA_POST:
-                raise ValueError("omega_post needs a core built with it (issue 11, fifth part)")
-            kw["omega_post"] = omega_post
+            kw["omega_post"] = _checked_omega(omega_post, "omega_post")
         choices = {}
-        for name, value, default, choose, where, takes, part in (
-                ("petrov_galerkin", petrov_galerkin, self.petrov_galerkin, self._cycle_choice, self._adaptive_2d(),
-                 SOLVE_TAKES_PETROV_GALERKIN, "issue 11, seventh part"),
+        for name, value, default, choose, where in (
+                ("petrov_galerkin", petrov_galerkin, self.petrov_galerkin, self._cycle_choice, self._adaptive_2d()),
                 ("upwind_contact_sweep", upwind_contact_sweep, self.upwind_contact_sweep, self._cycle_choice,
-                 self._adaptive_2d(), SOLVE_TAKES_UPWIND_CONTACT_SWEEP, "issue 11, eleventh part"),
+                 self._adaptive_2d()),
                 ("projected_coarse_correction", projected_coarse_correction, self.projected_coarse_correction,
-                 self._switch, self.rotated_frames(), SOLVE_TAKES_PROJECTED_COARSE, "stop 27")):
+                 self._switch, self.rotated_frames())):
             on = choose(name, default if value is None else value, where)
             if on and method not in ("nmg", "linear") and value is not None:
                 raise ValueError(f"{name} is a choice of method 'nmg' (Algorithm 2), not {method!r}")
             if on and method == "nmg":
-                if not takes:
-                    raise ValueError(f"{name} needs a core built with it ({part})")
                 kw[name] = True
             choices[name] = on
-        if SOLVE_TAKES_CYCLE_OPTIONS:
-            kw.update(cycle=options.cycle, nu1=options.nu1, nu2=options.nu2, progress=progress)
-        elif progress is not None:
-            raise ValueError("progress needs a core that reports every cycle (the redesigned core of issue 9); this "
-                             "build runs all cycles in one call")
+        kw.update(cycle=options.cycle, nu1=options.nu1, nu2=options.nu2)
         if method == "fixed-point":
             if not isinstance(self.friction, Coulomb) or self.law == "linear":
                 raise ValueError("the fixed-point method (Algorithm 1) needs Coulomb friction on a contact boundary")
             solver = self.core_solver(options.cycle, options.nu1, options.nu2)
-            return self._result(solver.solve(u0, fixed_point=True, **kw), method, options)
+            return self._result(solver.solve(u0, dict(kw, method="fixed-point"), progress=progress, reference=error_reference),
+                                method, options)
         if method in ("nmg", "tnnmg"):
             solver = self.core_solver(options.cycle, options.nu1, options.nu2)
             if method == "tnnmg":
-                if not SOLVE_TAKES_CYCLE_OPTIONS:
-                    raise ValueError("method 'tnnmg' needs the redesigned core (issue 9)")
-                kw["tnnmg"] = True
+                kw["method"] = "tnnmg"
                 if linear is not None or lines is not None:
-                    if not SOLVE_TAKES_LINEAR:
-                        raise ValueError("linear= and lines= need a core with the robust linear corrections (issue 14)")
                     kw.update(linear=linear, lines=None if lines is None else bool(lines))
-            return self._result(solver.solve(u0, **kw), method, options)
+            return self._result(solver.solve(u0, kw, progress=progress, reference=error_reference), method, options)
         if reference is None:
             reference = self.solve("nmg", tol=tol, rtol=rtol, max_cycles=max_cycles, cycle=options.cycle,
                                    nu1=options.nu1, nu2=options.nu2, threads=threads, ordering=ordering, omega=omega,
@@ -728,7 +683,7 @@ class ContactProblem:
         t0 = time.perf_counter()
         solver = self._known_state_solver(reference, options)
         build = time.perf_counter() - t0
-        raw = solver.solve(None, **kw)
+        raw = solver.solve(None, kw, progress=progress, reference=error_reference)
         raw["contact_force"], raw["friction_bound"], raw["state"] = self._contact_outputs_linear(raw, reference)
         res = self._result(raw, method, options)
         # building its hierarchy for the known state is setup, like the nmg solver's own build

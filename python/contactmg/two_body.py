@@ -265,7 +265,8 @@ class MultiBodyProblem(ContactProblem):
         values = self.fixed_values if fixed_values is None else fixed_values
         solver = (_core.ContactSolver2D if self.mesh.dim == 2 else _core.ContactSolver3D)(self.A, self.load if load is None else load, self.fixed, values,
                                        c.nodes, c.normals, c.gaps, self.coefficients, law,
-                                       [t.as_tuple() for t in self.transfers], options.cycle, options.nu1, options.nu2,
+                                       [t.as_tuple() for t in self.transfers],
+                                       dict(cycle=options.cycle, nu1=options.nu1, nu2=options.nu2),
                                        frame_fixed=frame_fixed, frame_values=frame_values)
         if self.tied_correction and law != "linear":
             if not hasattr(solver, "enable_tied_correction"):
