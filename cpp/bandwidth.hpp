@@ -103,7 +103,7 @@ double block_read_bytes_per_second(Index blocks, int repeats, int per_row) {
     }
   });
   std::vector<double> x(kx * d, 1.0), y(rows * d);
-  const Index ahead = prefetch_value_rows();
+  constexpr Index ahead = kPrefetchValueRows;
   const double best = best_seconds(repeats, [&] {
     parallel_for(rows, [&](Index i) {
       prefetch_row_values<d>(A.values.data(), A.indptr.data(), i, ahead, rows);

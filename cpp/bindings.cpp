@@ -244,17 +244,6 @@ py::dict options_to_dict(const SolverOptions& o) {
 }
 
 
-// A process-wide switch of the core (tests and benchmarks compare two paths in one process): sets it
-// unless given None, and returns the previous value.
-template <class T>
-void def_switch(py::module_& m, const char* name, T& (*setting)(), const char* arg, const char* doc) {
-  m.def(name, [setting](py::object v) {
-    const T old = setting();
-    if (!v.is_none()) setting() = v.cast<T>();
-    return old;
-  }, py::arg(arg) = py::none(), doc);
-}
-
 template <int d>
 void bind_dim(py::module_& m) {
   const std::string sfx = std::to_string(d) + "D";
@@ -433,19 +422,23 @@ void bind_dim(py::module_& m) {
            "of a solver built with them")
       .def_property_readonly("options", [](const CS& S) { return options_to_dict(S.options()); },
                              "the options every solve starts from")
-      .def("smooth", [](CS& S, DArr u0, int sweeps, const std::string& ordering, int threads) {
+      .def("smooth", [](CS& S, DArr u0, int sweeps, const std::string& ordering, int threads, double omega, bool per_row) {
              require_shape(u0, "u0", {(py::ssize_t)S.num_nodes(), d});
              if (sweeps < 0) throw InputError("sweeps must be >= 0");
+             if (!(omega > 0 && omega < 2)) throw InputError("omega: the over-relaxation must lie in (0, 2)");
              std::vector<double> u;
              {
                const Ordering o = parse_ordering(ordering);
                py::gil_scoped_release release;
                ThreadScope team(threads);
-               u = S.smooth(u0.data(), sweeps, o);
+               u = S.smooth(u0.data(), sweeps, o, omega, per_row);
              }
              return to_numpy(u, {(py::ssize_t)S.num_nodes(), d});
            }, py::arg("u0"), py::arg("sweeps") = 1, py::arg("ordering") = "lexicographic", py::arg("threads") = 0,
-           "Nonlinear Gauss-Seidel sweeps (alternating, forward first) from u0; a solution is a fixed point")
+           py::arg("omega") = 1.0, py::arg("per_row") = false,
+           "Nonlinear Gauss-Seidel sweeps (alternating, forward first) from u0; a solution is a fixed point. omega: the "
+           "over-relaxation of the rows without contact; per_row: every row through the per-row path (the reference of "
+           "the range kernel of a level stored by colours)")
       .def_property_readonly("num_levels", [](const CS& S) { return S.hierarchy().num_coarse_levels() + 1; })
       .def_property_readonly("frames", [](const CS& S) { return frames_array<d>(S); },
                              "the contact frames Q = [n, t(, s)] (columns), shape (num_contact, d, d)")
@@ -468,7 +461,9 @@ void bind_dim(py::module_& m) {
            "Load paths: the previous step's displacement (n, d), canonical; friction then acts on the slip "
            "increment u_T - u_prev_T and stick means no slip in this step. None: from the reference configuration")
       .def_property_readonly("has_slip_origin", &CS::has_slip_origin)
-      .def("_keep_cycle_workspace", &CS::keep_workspace, py::arg("on"),
+      .def_property_readonly("coarsest_factorizations", [](const CS& S) { return S.hierarchy().coarsest_factorizations(); },
+                             "factorizations of the coarsest-level matrix by this solver so far")
+      .def("keep_workspace", &CS::keep_workspace, py::arg("on"),
            "whether the fine vectors of the cycles (r, u_old, the Anderson history) stay from one solve to the next "
            "(True, the default: a later solve touches no new pages) or go at the end of each (a solver made for one "
            "solve: the lower peak); returns the previous setting")
@@ -620,22 +615,6 @@ PYBIND11_MODULE(_core, m) {
 
   m.def("openmp", [] { return have_openmp(); }, "whether the core was built with OpenMP threads");
   m.def("max_threads", [] { return max_threads(); }, "the cores the threads of a solve may use (threads=0)");
-  // issue 15/10 tuning and test hooks (process-wide)
-  m.def("parallel_grains", [] { return py::make_tuple(parallel_grains().colour, parallel_grains().level_rows); },
-        "(colour, level_rows): average rows per colour / coarse-level rows below which work stays on one thread");
-  m.def("set_parallel_grains", [](Index colour, Index level_rows) {
-    if (colour < 0 || level_rows < 0) throw InputError("grains must be >= 0");
-    parallel_grains().colour = colour;
-    parallel_grains().level_rows = level_rows;
-  });
-  m.def("coarsest_max_rank", [] { return CoarsestSolver::max_rank(); },
-        "changed coarsest rows up to which an update corrects the kept factorization (0: factorize every time)");
-  m.def("set_coarsest_max_rank", [](Index r) {
-    if (r < 0) throw InputError("the rank must be >= 0");
-    CoarsestSolver::max_rank() = r;
-  });
-  m.def("coarsest_factorizations", [] { return CoarsestSolver::factorizations_total(); },
-        "factorizations of a coarsest-level matrix in this process so far");
   // Tests: the coarsest solver on its own -- S0 factorized, then S as an update (a low-rank
   // correction where it allows one), then a solve with b. Returns (x, rank of the correction,
   // factorizations of this solver). Dense n x n arrays in, their nonzero entries taken.
@@ -687,31 +666,6 @@ PYBIND11_MODULE(_core, m) {
   }, py::arg("blocks") = 9000000, py::arg("repeats") = 5, py::arg("threads") = 1, py::arg("dim") = 2,
   "GB/s of a matrix-like read: `blocks` dim x dim blocks of doubles with int32 columns (8 dim^2 + 4 bytes a block; 7 "
   "(2D) or 15 (3D) a row) times a cache-resident x through the row passes' kernel (best of `repeats`)");
-  def_switch(m, "_fine_sweep_generic", &fine_sweep_generic, "on",
-             "tests: every fine nonlinear sweep through the per-row path (True) or the range kernel where the level is "
-             "stored by colours (False, the default); returns the previous setting (None: only returns it)");
-  def_switch(m, "_level_sweep_generic", &level_sweep_generic, "on",
-             "tests: every coarse (projected or block) sweep through the per-row path (True) or the range kernel where the "
-             "level is stored by colours (False, the default); returns the previous setting (None: only returns it)");
-  def_switch(m, "_prefetch_value_rows", &prefetch_value_rows, "rows",
-             "benchmarks: the fine and coarse sweeps, the products, the residual and the norm passes prefetch the matrix "
-             "values of the row this many rows ahead (0: off; 16 by default); returns the previous setting (None: only returns it)");
-  def_switch(m, "_locality_order", &locality_order_enabled, "on",
-             "tests and benchmarks: solvers built from now on colour (and store by colours) every level in its locality "
-             "order (True, the default) or in the user's numbering (False, as before issue 15's locality order); returns the "
-             "previous setting (None: only returns it)");
-  def_switch(m, "_fused_residual_restriction", &fused_residual_restriction, "on",
-             "tests and benchmarks: the cycles restrict every level's residual as it is formed, without a residual vector "
-             "(True, the default), or form the vector first and restrict it (False, as before); the same bits either way; "
-             "returns the previous setting (None: only returns it)");
-  def_switch(m, "_keep_cycle_workspace", &keep_cycle_workspace, "on",
-             "tests and benchmarks: a solver keeps the fine vectors of its cycles (r, u_old, the Anderson history) from one "
-             "solve to the next (True, the default) or every solve allocates them again (False, as before); returns the "
-             "previous setting (None: only returns it)");
-  def_switch(m, "_float_coarse_values", &float_coarse_values, "on",
-             "tests and benchmarks: the coarse levels but the coarsest also hold their matrix values rounded once to float, "
-             "and their sweeps, residuals and products read those (True) or only double values (False, the default); takes "
-             "effect from a solver's next solve or rebuild; returns the previous setting (None: only returns it)");
   m.def("anderson_iterates", [](DArr M, DArr c, DArr x0, int steps, int refuse_every, int threads) {
     const Index n = c.size(), m = M.ndim() == 2 ? M.shape(0) : 0;
     if (m < 1 || n % m != 0) throw InputError("M must be m x m with m dividing the length of c");

@@ -32,14 +32,11 @@ CMG_PREFETCH_INLINE void prefetch_block_columns(const ColIndex* indices, Index b
   for (Index k = b; k < e; ++k) __builtin_prefetch(x + d * (Index)indices[k]);
 }
 
-// The row passes also prefetch the matrix values of the row this many rows ahead (0: off). The
-// values are one sequential stream, but beside the gathers of x and the other arrays the hardware
-// prefetcher of this VM did not keep ahead of it: level 9, one thread, quiet machine, in one process
-// (_core._prefetch_value_rows): fine sweep 35.8 -> 27.1 ms, cycle 0.499 -> 0.403 s; 16 and 64 alike.
-inline Index& prefetch_value_rows() {
-  static Index rows = 16;
-  return rows;
-}
+// The row passes also prefetch the matrix values of the row this many rows ahead. The values are
+// one sequential stream, but beside the gathers of x and the other arrays the hardware prefetcher
+// did not keep ahead of it: level 9, one thread, fine sweep 35.8 -> 27.1 ms, cycle 0.499 -> 0.403 s;
+// 16 and 64 alike (docs/dev/decisions/0008-prefetching.md).
+constexpr Index kPrefetchValueRows = 16;
 
 // The cache lines of the values of row i + ahead (if there is one); V: the stored value type
 template <int d, class V>
@@ -53,9 +50,7 @@ CMG_PREFETCH_INLINE void prefetch_row_values(const V* values, const Index* ptr, 
 // s (+/-)= sum_{k in [b, e)} A_k x_{col k} over d x d row-major blocks. Scalar accumulators: with
 // Eigen's small vector as the accumulator GCC kept it in memory across the loop (a store-to-load
 // chain per block, the hottest instructions of the fine sweep's profile) and summed each block
-// row by a horizontal add. The same products and sums in the same order: the same bits. V: double,
-// or float (a coarse level's rounded copy, float_coarse_values): each entry widened to double, the
-// products and sums in double as before.
+// row by a horizontal add. The same products and sums in the same order: the same bits.
 template <int d, bool subtract, class V>
 inline void accumulate_blocks(const V* values, const ColIndex* indices, Index b, Index e, const double* x, double* s) {
   double acc[d];
@@ -94,17 +89,6 @@ inline void accumulate_block_differences(const double* values, const ColIndex* i
   for (int a = 0; a < d; ++a) s[a] = acc[a];
 }
 
-// Tests and benchmarks (issue 15): when set, the coarse levels l >= 1 of a Galerkin hierarchy also
-// hold their values rounded once to float (BlockMatrix::values32, made from the double values after
-// every Galerkin product or incremental update), and their sweeps, residuals and products read those
-// (half the bytes); the products, sums and the inverted diagonal blocks stay double, as does the
-// double copy every other reader uses (the next Galerkin product, the diagonal inverses, the lines,
-// the coarsest factorization). Off by default.
-inline bool& float_coarse_values() {
-  static bool on = false;
-  return on;
-}
-
 template <int d>
 struct BlockMatrix {
   static constexpr int bs = d * d;
@@ -115,24 +99,6 @@ struct BlockMatrix {
   std::vector<ColIndex> indices;
   std::vector<double> values;        // nnz * d * d, each block row-major
   std::vector<Index> diag;           // position of the diagonal block per row (-1 if absent)
-  // values rounded to float, or empty (float_coarse_values): when set, the row passes below and the
-  // coarse sweeps read these; `values` stays the matrix of every other reader
-  std::vector<float> values32;
-
-  // f(pointer to the values the row passes read): the float copy if there is one
-  template <class F>
-  CMG_PREFETCH_INLINE decltype(auto) with_values(F&& f) const {
-    if (!values32.empty()) return f(values32.data());
-    return f(values.data());
-  }
-  // values32 = values rounded (all blocks, or the blocks [k0, k1))
-  void round_values32() {
-    values32.resize(values.size());
-    parallel_for((Index)values.size(), [&](Index k) { values32[k] = (float)values[k]; }, 8 * kParallelGrain);
-  }
-  void round_values32(Index k0, Index k1) {
-    for (Index k = k0 * bs; k < k1 * bs; ++k) values32[k] = (float)values[k];
-  }
 
   Index nnz() const { return (Index)indices.size(); }
   MatMap<d> block(Index k) { return MatMap<d>(values.data() + k * bs); }
@@ -168,19 +134,18 @@ struct BlockMatrix {
 
   // y = A x (rows on all threads: each writes its own entries)
   void multiply(const double* x, double* y) const {
-    const Index ahead = prefetch_value_rows();
-    with_values([&](const auto* vals) {
-      parallel_for(rows, [&](Index i) {
-        prefetch_ahead(i, x);
-        prefetch_row_values<d>(vals, indptr.data(), i, ahead, rows);
-        double s[d] = {};
-        accumulate_blocks<d, false>(vals, indices.data(), indptr[i], indptr[i + 1], x, s);
-        for (int a = 0; a < d; ++a) y[d * i + a] = s[a];
-      });
+    constexpr Index ahead = kPrefetchValueRows;
+    const double* vals = values.data();
+    parallel_for(rows, [&](Index i) {
+      prefetch_ahead(i, x);
+      prefetch_row_values<d>(vals, indptr.data(), i, ahead, rows);
+      double s[d] = {};
+      accumulate_blocks<d, false>(vals, indices.data(), indptr[i], indptr[i + 1], x, s);
+      for (int a = 0; a < d; ++a) y[d * i + a] = s[a];
     });
   }
 
-  // s = (b - A x)_i, with the prefetches of the row passes (vals: what with_values gives). The one
+  // s = (b - A x)_i, with the prefetches of the row passes (vals: the values). The one
   // row kernel of residual() and of the residual restricted in the same pass (mg/transfer.hpp):
   // the same bits either way.
   template <class V>
@@ -193,19 +158,17 @@ struct BlockMatrix {
 
   // r = b - A x in one pass (a product and a vector update fused)
   void residual(const double* x, const double* b, double* r) const {
-    const Index ahead = prefetch_value_rows();
-    with_values([&](const auto* vals) {
-      parallel_for(rows, [&](Index i) {
-        double s[d];
-        residual_row(vals, x, b, i, ahead, s);
-        for (int a = 0; a < d; ++a) r[d * i + a] = s[a];
-      });
+    constexpr Index ahead = kPrefetchValueRows;
+    const double* vals = values.data();
+    parallel_for(rows, [&](Index i) {
+      double s[d];
+      residual_row(vals, x, b, i, ahead, s);
+      for (int a = 0; a < d; ++a) r[d * i + a] = s[a];
     });
   }
 
   std::size_t memory_bytes() const {
-    return sizeof(Index) * (indptr.size() + diag.size()) + sizeof(ColIndex) * indices.size() + sizeof(double) * values.size() +
-           sizeof(float) * values32.size();
+    return sizeof(Index) * (indptr.size() + diag.size()) + sizeof(ColIndex) * indices.size() + sizeof(double) * values.size();
   }
 };
 

@@ -144,13 +144,18 @@ class ContactSolver {
   // `sweeps` nonlinear Gauss-Seidel sweeps of the solver's law from u0 (canonical), alternating
   // direction starting forward; returns the canonical iterate. A solution is a fixed point of this
   // map (the nodal rules keep every local solution), so it serves as an independent check.
-  std::vector<double> smooth(const double* u0, int sweeps, Ordering ordering = Ordering::Lexicographic) {
+  // omega: the over-relaxation of the rows without contact (1: the plain nonlinear sweep of the
+  // independent check); per_row: every row through the per-row path, also on a level stored by
+  // colours (the range kernel's reference).
+  std::vector<double> smooth(const double* u0, int sweeps, Ordering ordering = Ordering::Lexicographic, double omega = 1.0,
+                             bool per_row = false) {
     return with_law(law_, [&](auto L) {
       start(u0, false);  // the fine level alone: the coarse levels stay as they are
       P_.set_bounds_to_coefficients();
-      P_.set_smoothing_omega(1.0);  // the independent check is the plain nonlinear sweep
+      P_.set_smoothing_omega(omega);
       const SweepOrder& order = fine_order(ordering);
-      for (int k = 0; k < sweeps; ++k) NonlinearGaussSeidel<d, decltype(L)>::sweep(P_, it_.u.data(), k % 2 == 0, order);
+      for (int k = 0; k < sweeps; ++k)
+        NonlinearGaussSeidel<d, decltype(L)>::sweep(P_, it_.u.data(), k % 2 == 0, order, -1.0, per_row);
       std::vector<double> u = it_.u;
       P_.basis().to_canonical(u.data());
       order_.back().to_user_in_place(u, d);
@@ -213,7 +218,7 @@ class ContactSolver {
   }
 
   CycleWorkspace* workspace() {
-    if (cmg::keep_cycle_workspace() && keep_work_) return &work_;
+    if (keep_work_) return &work_;
     work_ = CycleWorkspace();  // not kept: what an earlier solve kept goes, the step allocates its own
     return nullptr;
   }
@@ -247,20 +252,18 @@ class ContactSolver {
       if (renumber) {
         // each colour stored in the level's locality order (renumbering.hpp); rank: the locality
         // position of each stored row of the level just renumbered
-        const bool local = locality_order_enabled();
-        std::vector<Index> locality, rank;
-        if (local) locality = reverse_cuthill_mckee<d>(A);
+        std::vector<Index> locality = reverse_cuthill_mckee<d>(A), rank;
         order.back() = Renumbering::by_colours<d>(A, locality);
-        if (local) rank = stored_rank(locality, order.back());
+        rank = stored_rank(locality, order.back());
         order.back().permute_matrix(A);
         if (!P.empty()) order.back().permute_rows(P.back());
         // each coarse level (not the coarsest: it is factorized) by the colours of its Galerkin pattern
         BlockMatrix<d> pattern;
         for (int l = (int)P.size() - 1; l >= 1; --l) {
           pattern = galerkin_pattern<d>(l + 1 == (int)P.size() ? A : pattern, P[l], TransposedPattern<d>(P[l]));
-          if (local) locality = induced_locality_order(P[l], rank);  // P[l]'s rows: stored, its columns: the user's
+          locality = induced_locality_order(P[l], rank);  // P[l]'s rows: stored, its columns: the user's
           order[l] = Renumbering::by_colours<d>(pattern, locality);
-          if (local) rank = stored_rank(locality, order[l]);
+          rank = stored_rank(locality, order[l]);
           order[l].permute_matrix(pattern);
           order[l].permute_columns(P[l]);
           order[l].permute_rows(P[l - 1]);
@@ -360,7 +363,6 @@ class ContactSolver {
   }
 
   void start(const double* u0, bool coarse = true) {
-    H_.sync_float_values();  // the coarse float copies as float_coarse_values() says now
     std::vector<double> u_stored;
     if (u0 && !order_.back().identity()) {
       u_stored = order_.back().to_storage(u0, num_nodes(), d);

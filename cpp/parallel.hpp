@@ -70,18 +70,12 @@ class ThreadScope {
 // Below this many items a loop runs on one thread: starting the team costs more than it saves.
 constexpr Index kParallelGrain = 4096;
 
-// Sizes below which the multigrid levels keep their work on the calling thread (issue 15): a
-// coloured sweep whose colours average fewer than `colour` rows (mg/sweep_order.hpp), a coarse
-// level of fewer than `level_rows` block rows and every coarser one (mg/cycle.hpp). Results do
-// not depend on them (bit for bit); tests lower them to run the parallel paths on small problems.
-struct ParallelGrains {
-  Index colour = 1024;
-  Index level_rows = 8192;
-};
-inline ParallelGrains& parallel_grains() {
-  static ParallelGrains g;
-  return g;
-}
+// Sizes below which the multigrid levels keep their work on the calling thread: a coloured sweep
+// whose colours average fewer than kSerialColourRows rows (mg/sweep_order.hpp), a coarse level of
+// fewer than kSerialLevelRows block rows and every coarser one (mg/cycle.hpp). Results do not
+// depend on them (bit for bit): waking the second thread costs more than it saves below them.
+constexpr Index kSerialColourRows = 1024;
+constexpr Index kSerialLevelRows = 8192;
 
 // f(i) for i in [0, n), items independent of each other; one thread below `grain` items.
 template <class F>

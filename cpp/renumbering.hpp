@@ -13,13 +13,6 @@
 
 namespace cmg {
 
-// Tests and benchmarks: when false, the rows of a colour are stored in the user's numbering (main
-// before the locality order); read when a solver is built, so two solvers of one process compare.
-inline bool& locality_order_enabled() {
-  static bool on = true;
-  return on;
-}
-
 // The locality order of a level (issue 15). The user's numbering of a refined mesh is not local:
 // every refinement appends its new nodes, so a row's neighbours lay all over the vector (19 MB at
 // level 9 in 2D against 2 MB of L2) and every gather of a sweep, product or transfer missed the

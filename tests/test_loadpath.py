@@ -259,29 +259,16 @@ def test_cli_cork_push_and_pull_back_dissipates():
     assert r.returncode == 2 and "--pull-back" in r.stderr.strip().splitlines()[-1]
 
 
-@pytest.fixture
-def coarsest_max_rank():
-    from contactmg import _core
-
-    old = _core.coarsest_max_rank()
-    yield _core.set_coarsest_max_rank
-    _core.set_coarsest_max_rank(old)
-
-
-@pytest.mark.parametrize("refactorize", [False, True])
-def test_cork_on_eight_axial_layers_pushed_and_pulled_back(refactorize, coarsest_max_rank):
+def test_cork_on_eight_axial_layers_pushed_and_pulled_back():
     """The finer coarse mesh of the cork (8 axial layers) on the push-and-pull-back path: it
     stopped with "the coarsest-level matrix is singular" -- nodes sliding by a round-off slip
     increment put friction Hessians of 1e17 on the coarse diagonal, whose incremental removal left
-    the coarsest matrix indefinite (refactorize: a new factorization after every update, where the
-    low-rank corrections had hidden it). Every step now converges to a state that meets Coulomb's
+    the coarsest matrix indefinite. Every step now converges to a state that meets Coulomb's
     law on the increment, and the way back takes less force than the way in at the same plunger
     position."""
     from contactmg import cork
     from contactmg.generators_3d import CORK_TOP
 
-    if refactorize:
-        coarsest_max_rank(0)
     p = cork.cork_problem(2, F, cork.PUSH, axial_layers=8)
     res = two_phase_path(p, [CORK_TOP], (0.0, 0.0, -cork.PUSH), 2, (0.0, 0.0, cork.PUSH), 2).solve(tol=1e-11)
     assert res.converged and len(res.steps) == 4

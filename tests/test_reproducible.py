@@ -108,16 +108,11 @@ def test_coarsest_low_rank_update_takes_the_changed_columns():
     # outside its storage and the correction misses the entry (the solve then fell back to a new
     # factorization of the lower triangle, which does not hold it either)
     n = 400
-    old = _core.coarsest_max_rank()
-    _core.set_coarsest_max_rank(96)  # the default: 400 rows allow a low-rank correction
-    try:
-        S0 = 4 * np.eye(n) - np.eye(n, k=1) - np.eye(n, k=-1)
-        S = S0.copy()
-        S[5, 9] += 1e-3
-        S[20, 20] += 0.5
-        b = np.linspace(1.0, 2.0, n)
-        x, rank, factorizations = _core._coarsest_update_solve(S0, S, b)
-    finally:
-        _core.set_coarsest_max_rank(old)
+    S0 = 4 * np.eye(n) - np.eye(n, k=1) - np.eye(n, k=-1)  # 400 rows allow a low-rank correction
+    S = S0.copy()
+    S[5, 9] += 1e-3
+    S[20, 20] += 0.5
+    b = np.linspace(1.0, 2.0, n)
+    x, rank, factorizations = _core._coarsest_update_solve(S0, S, b)
     assert rank == 3 and factorizations == 1
     assert np.abs(S @ x - b).max() <= 1e-13 * np.abs(b).max()

@@ -9,7 +9,6 @@ import resource
 import numpy as np
 import pytest
 
-from contactmg import _core
 from contactmg.hertz import hertz_problem
 
 
@@ -39,11 +38,11 @@ def test_a_second_solve_touches_no_new_fine_vector_in_its_cycles(ordering):
     # a later solve starts from the coarse levels as built, like the first: its bits
     assert np.array_equal(r.displacement, first.displacement)
     # the measure sees the fresh workspace of the old way: its 6 Anderson vectors in the cycles
-    old = _core._keep_cycle_workspace(False)
+    p.solver.keep_workspace(False)
     try:
         fresh, _ = faults_in_cycles(p, ordering)
     finally:
-        _core._keep_cycle_workspace(old)
+        p.solver.keep_workspace(True)
     assert fresh > 4 * pages, (fresh, pages)
 
 
@@ -63,12 +62,9 @@ def test_a_kept_workspace_changes_no_bit():
     # the same sequence of solves on two problems, one keeping its workspace, one not: the same bits
     out = {}
     for keep in (True, False):
-        old = _core._keep_cycle_workspace(keep)
-        try:
-            p = hertz_problem("triangle", 5, 5.0)
-            out[keep] = [p.solve("nmg", threads=t) for t in (1, 2, 1)]
-        finally:
-            _core._keep_cycle_workspace(old)
+        p = hertz_problem("triangle", 5, 5.0)
+        p.solver.keep_workspace(keep)
+        out[keep] = [p.solve("nmg", threads=t) for t in (1, 2, 1)]
     for a, b in zip(out[True], out[False]):
         assert a.cycles == b.cycles
         assert np.array_equal(a.displacement, b.displacement)

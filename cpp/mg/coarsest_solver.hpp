@@ -13,7 +13,7 @@
 //   S^{-1} b = y - Z (I + M Z_K)^{-1} M y_K,   y = S0^{-1} b,   Z = S0^{-1} E,
 // with Z_K, y_K the rows K. The columns of Z are kept per dof while S0 lives (the changed rows of
 // consecutive updates are mostly the same), so an update costs the new columns and a |K| x |K|
-// LU. S0 is factorized anew when K grows past max_rank(), when the capacitance I + M Z_K is
+// LU. S0 is factorized anew when K grows past kMaxRank, when the capacitance I + M Z_K is
 // ill-conditioned, when a solve's componentwise backward error is not at round-off level after
 // one step of iterative refinement, and on every full
 // rebuild of the hierarchy. The solutions equal those of a new factorization to round-off (not
@@ -35,16 +35,8 @@ class CoarsestSolver {
  public:
   using SpMat = Eigen::SparseMatrix<double>;
   // Above this many changed rows a new factorization is cheaper than the columns of Z (each one a
-  // solve with S0: at 2,286 dofs a solve is ~1 % of a factorization). 0: factorize every time
-  // (the behaviour before; tests compare the two). Process-wide, like the count of factorizations.
-  static Index& max_rank() {
-    static Index r = 96;
-    return r;
-  }
-  static long& factorizations_total() {
-    static long n = 0;
-    return n;
-  }
+  // solve with S0: at 2,286 dofs a solve is ~1 % of a factorization).
+  static constexpr Index kMaxRank = 96;
 
   // The matrix S to solve with from now on (symmetric, compressed). may_update: a low-rank
   // correction of the kept factorization is allowed (incremental coarse updates); false forces a
@@ -99,14 +91,13 @@ class CoarsestSolver {
     Z_.resize(S_.rows(), 0);
     have_factor_ = true;
     ++factorizations_;
-    ++factorizations_total();
   }
 
   // K, M and the capacitance for S - S0; false when a new factorization is needed.
   bool low_rank_update() {
-    // below 4 max_rank() rows a factorization costs about what the columns of Z cost (the 2D
+    // below 4 kMaxRank rows a factorization costs about what the columns of Z cost (the 2D
     // coarsest levels: 56 dofs): those keep the plain factorization, and their bits
-    if (max_rank() == 0 || S_.rows() != S0_.rows() || S_.rows() < 4 * max_rank()) return false;
+    if (S_.rows() != S0_.rows() || S_.rows() < 4 * kMaxRank) return false;
     const SpMat D = S_ - S0_;
     // K: the rows and the columns of D's entries. The Galerkin products and their incremental
     // updates round the two triangles differently (S is symmetric only to round-off), so D may
@@ -120,7 +111,7 @@ class CoarsestSolver {
         if (it.value() != 0)
           for (const Index r : {(Index)it.row(), (Index)it.col()})
             if (!in[r]) { in[r] = 1; rows.push_back(r); }
-    if ((Index)rows.size() > max_rank()) return false;
+    if ((Index)rows.size() > kMaxRank) return false;
     std::sort(rows.begin(), rows.end());
     K_ = rows;
     if (K_.empty()) return true;  // S == S0: plain solves
@@ -128,7 +119,7 @@ class CoarsestSolver {
     // columns of Z for the dofs of K not seen since S0 was factorized
     Index missing = 0;
     for (Index r : K_) missing += !zcol_.count(r);
-    if (Z_.cols() + missing > 2 * max_rank()) { K_.clear(); return false; }  // bounds the memory of Z
+    if (Z_.cols() + missing > 2 * kMaxRank) { K_.clear(); return false; }  // bounds the memory of Z
     if (missing) {
       const Index old = Z_.cols();
       Z_.conservativeResize(n, old + missing);

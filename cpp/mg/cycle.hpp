@@ -75,7 +75,7 @@ class CoarseCycle {
     set_bounded(C, bounded);
     zero(C.x);
     cur_ = &orders(opt.ordering);
-    serial_rows_ = parallel_grains().level_rows;
+    serial_rows_ = kSerialLevelRows;
     lines_ = lines;
     omega_ = opt.omega;
     omega_post_ = opt.post_omega();
@@ -130,7 +130,7 @@ class CoarseCycle {
   }
 
   void cycle(const SolverOptions& opt, int l, CycleType type) {
-    // A level below parallel_grains().level_rows rows, and every coarser one, runs on the calling thread: its
+    // A level below kSerialLevelRows rows, and every coarser one, runs on the calling thread: its
     // loops are too short to pay for waking the second thread (a W/F-cycle visits the small
     // levels most often). Every loop gives the same bits on any thread count, so this is a
     // matter of time only.
@@ -151,11 +151,7 @@ class CoarseCycle {
     const Prolongation<d>& P = H_.prolongation(l - 1);
     for (int v = 0; v < visits; ++v) {
       // b - A x restricted as it is formed (one pass over A; was a residual pass, then the restriction)
-      if (fused_residual_restriction()) restrict_level_residual<d>(A, P, L.x.data(), L.b.data(), C.b.data(), C.r.data());
-      else {
-        A.residual(L.x.data(), L.b.data(), L.r.data());
-        restrict_residual<d>(P, nullptr, L.r.data(), C.b.data(), C.r.data());
-      }
+      restrict_level_residual<d>(A, P, L.x.data(), L.b.data(), C.b.data(), C.r.data());
       // the coarser level gets the slack that remains on this one
       if (L.any_bounds) restrict_slack<d>(P, L.lo.data(), L.hi.data(), L.x.data(), C.lo.data(), C.hi.data(), L.bounded.data());
       set_bounded(C, L.any_bounds);
@@ -200,7 +196,7 @@ class CoarseCycle {
     }
   }
 
-  Index serial_rows_ = 0;  // parallel_grains().level_rows of this correction (see cycle())
+  Index serial_rows_ = 0;  // kSerialLevelRows in a correction (see cycle())
   bool serial_ = false;
   const GalerkinHierarchy<d>& H_;
   std::vector<SweepOrder> order_, coloured_;

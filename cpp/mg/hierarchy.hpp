@@ -62,17 +62,6 @@ class GalerkinHierarchy {
       return factorize(S, f);
     });
   }
-  // The float copies of the coarse values (levels 1.., not the coarsest: its exact solve is double)
-  // brought to float_coarse_values(): made where the switch is on and a level has none, dropped
-  // where it is off (a solve calls this first, so the switch takes effect from the next solve).
-  void sync_float_values() {
-    const bool on = float_coarse_values();
-    for (int l = 1; l < (int)lv_.size(); ++l) {
-      BlockMatrix<d>& A = lv_[l].A;
-      if (!on) std::vector<float>().swap(A.values32);
-      else if (A.values32.size() != A.values.size()) A.round_values32();
-    }
-  }
   int coarsest_factorizations() const { return coarsest_.factorizations(); }
   int rebuilds() const { return rebuilds_; }
   // incremental updates since the last full rebuild (0: the levels are the Galerkin products of
@@ -126,7 +115,6 @@ class GalerkinHierarchy {
     for (auto& [pos, M] : add) {
       overlay_.blocks.emplace_back(pos, Mat<d>(L.A.block(pos)));
       L.A.block(pos) += M;
-      if (!L.A.values32.empty()) L.A.round_values32(pos, pos + 1);
     }
     for (std::size_t r = 0; r < rows.size(); ++r) {
       MatMap<d> Di(L.Dinv.data() + rows[r] * d * d);
@@ -140,10 +128,7 @@ class GalerkinHierarchy {
   void clear_top_overlay() {
     if (!overlay_.on) return;
     Level& L = lv_.back();
-    for (const auto& [pos, M] : overlay_.blocks) {
-      L.A.block(pos) = M;
-      if (!L.A.values32.empty()) L.A.round_values32(pos, pos + 1);
-    }
+    for (const auto& [pos, M] : overlay_.blocks) L.A.block(pos) = M;
     for (const auto& [i, M] : overlay_.dinv) MatMap<d>(L.Dinv.data() + i * d * d) = M;
     overlay_ = Overlay();
     factor_lines((int)lv_.size() - 1);
@@ -170,8 +155,6 @@ class GalerkinHierarchy {
       apply_deltas();
     }
     for (int l = 0; l < nc; ++l) factor_lines(l);
-    for (int l = 0; l < nc; ++l) lv_[l].A.values32.clear();
-    sync_float_values();
     factorize_coarsest(false);
     ++rebuilds_;
     incremental_ = 0;
@@ -270,8 +253,6 @@ class GalerkinHierarchy {
               add_delta(l - 1, Pl.indices[b], Pl.indices[b2], Pl.block(e.i, b).transpose() * e.M * Pl.block(e.j, b2));
       }
       for (const auto& e : delta_[l]) L.A.block(e.pos) += e.M;
-      if (!L.A.values32.empty())  // each changed block rounded once from its double values
-        for (const auto& e : delta_[l]) L.A.round_values32(e.pos, e.pos + 1);
       slot_[l].clear();
       for (const auto& e : delta_[l]) invert_diagonal<d>(L.A, L.Dinv, L.inert, L.scale, e.i, e.i + 1);
       if (!delta_[l].empty()) factor_lines(l);

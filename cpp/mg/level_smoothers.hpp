@@ -63,7 +63,6 @@ void invert_diagonal(const BlockMatrix<d>& A, std::vector<double>& Dinv, std::ve
 
 // b_i - sum_{k != i} A_ik x_k
 // (the blocks before and after the diagonal one in two loops: no test per block)
-// (vals: the values the row passes read, A.values or its float copy A.values32)
 template <int d, class V>
 inline Vec<d> local_rhs(const BlockMatrix<d>& A, const V* vals, const double* x, const double* b, Index i) {
   Vec<d> s = CVecMap<d>(b + d * i);
@@ -79,7 +78,7 @@ inline Vec<d> local_rhs(const BlockMatrix<d>& A, const V* vals, const double* x,
 
 template <int d>
 inline Vec<d> local_rhs(const BlockMatrix<d>& A, const double* x, const double* b, Index i) {
-  return A.with_values([&](const auto* vals) { return local_rhs<d>(A, vals, x, b, i); });
+  return local_rhs<d>(A, A.values.data(), x, b, i);
 }
 
 // x_i <- x_i + omega (y - x_i), y the exact block solve (omega = 1: y; SolverOptions::omega says why)
@@ -87,13 +86,6 @@ template <int d>
 inline void relaxed_assign(VecMap<d>& xi, const Vec<d>& y, double omega) {
   if (omega == 1.0) xi = y;
   else xi += omega * (y - Vec<d>(xi));
-}
-
-// Tests and benchmarks: when set, the coarse sweeps take the per-row path on every level instead of
-// the range kernel of a level stored by colours; the two give the same bits (tests/test_locality_order.py).
-inline bool& level_sweep_generic() {
-  static bool generic = false;
-  return generic;
 }
 
 // x <- x + omega (inv s - x) (relaxed_assign of inv * s) on scalars: Eigen's product summed each
@@ -140,8 +132,7 @@ __attribute__((noinline)) void projected_row_out_of_line(const BlockMatrix<d>& A
 // fine sweep's sweep_range): the matrix arrays in registers, x prefetched at the columns of the row
 // kPrefetchRows ahead (other colours' ranges), the stored inverse applied on scalars; bounded rows
 // (bounded != nullptr: a projected sweep; only near the contact zone) go out of line. The same
-// sums and products in the same order as the per-row path: the same bits. V: the stored value
-// type of the values read (A.with_values: float on a coarse level under float_coarse_values).
+// sums and products in the same order as the per-row path: the same bits.
 template <int d, class V>
 void gs_range(const BlockMatrix<d>& A, const V* values, const double* Dinv, const std::uint8_t* bounded, const std::uint8_t* inert,
               const double* lo, const double* hi, const double* b, double* x, double omega, Index r0, Index r1) {
@@ -149,7 +140,7 @@ void gs_range(const BlockMatrix<d>& A, const V* values, const double* Dinv, cons
   const Index* ptr = A.indptr.data();
   const Index* diag = A.diag.data();
   const Index n = A.rows;
-  const Index ahead = prefetch_value_rows();
+  constexpr Index ahead = kPrefetchValueRows;
   for (Index i = r0; i < r1; ++i) {
     if (i + kPrefetchRows < n) prefetch_block_columns<d>(cols, ptr[i + kPrefetchRows], ptr[i + kPrefetchRows + 1], x);
     prefetch_row_values<d>(values, ptr, i, ahead, n);
@@ -172,13 +163,13 @@ void gs_range(const BlockMatrix<d>& A, const V* values, const double* Dinv, cons
 template <int d>
 void gs_range(const BlockMatrix<d>& A, const double* Dinv, const std::uint8_t* bounded, const std::uint8_t* inert, const double* lo,
               const double* hi, const double* b, double* x, double omega, Index r0, Index r1) {
-  A.with_values([&](const auto* vals) { gs_range<d>(A, vals, Dinv, bounded, inert, lo, hi, b, x, omega, r0, r1); });
+  gs_range<d>(A, A.values.data(), Dinv, bounded, inert, lo, hi, b, x, omega, r0, r1);
 }
 
 template <int d>
 void block_gs_sweep(const BlockMatrix<d>& A, const std::vector<double>& Dinv, const double* b, double* x, bool forward,
                     const SweepOrder& order = SweepOrder(), double omega = 1.0) {
-  if (order.contiguous() && !level_sweep_generic()) {
+  if (order.contiguous()) {
     order.visit_ranges(forward, [&](Index r0, Index r1) {
       gs_range<d>(A, Dinv.data(), nullptr, nullptr, nullptr, nullptr, b, x, omega, r0, r1);
     });
@@ -196,7 +187,7 @@ template <int d>
 void projected_gs_sweep(const BlockMatrix<d>& A, const std::vector<double>& Dinv, const std::vector<std::uint8_t>& bounded,
                         const std::vector<std::uint8_t>& inert, const double* lo, const double* hi, const double* b, double* x, bool forward,
                         const SweepOrder& order = SweepOrder(), double omega = 1.0) {
-  if (order.contiguous() && !level_sweep_generic()) {
+  if (order.contiguous()) {
     order.visit_ranges(forward, [&](Index r0, Index r1) {
       gs_range<d>(A, Dinv.data(), bounded.data(), inert.data(), lo, hi, b, x, omega, r0, r1);
     });

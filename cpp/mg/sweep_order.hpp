@@ -70,7 +70,7 @@ class SweepOrder {
   // One parallel region per sweep with a barrier between colours, not a region per colour: each
   // region start wakes the second thread, which sleeps between regions (OMP_WAIT_POLICY=PASSIVE),
   // and a fork-join costs about two such hand-overs where a barrier costs one (issue 15). Sweeps
-  // whose colours average fewer than parallel_grains().colour rows run on the calling thread: the hand-overs
+  // whose colours average fewer than kSerialColourRows rows run on the calling thread: the hand-overs
   // would cost more than the second thread saves. Rows of one colour are independent, so the
   // result is the same bit for bit either way.
   template <class F>
@@ -80,7 +80,7 @@ class SweepOrder {
       const Index total = colour_ptr_.back() - colour_ptr_.front();
       const auto row = [&](Index q) { return contiguous_ ? q : rows_[q]; };
 #ifdef CONTACTMG_OPENMP
-      if (total >= parallel_grains().colour * nc && team_size() > 1) {
+      if (total >= kSerialColourRows * nc && team_size() > 1) {
 #pragma omp parallel
         for (Index cc = 0; cc < nc; ++cc) {
           const Index c = forward ? cc : nc - 1 - cc;
@@ -114,7 +114,7 @@ class SweepOrder {
     const Index nc = num_colours();
 #ifdef CONTACTMG_OPENMP
     const Index total = colour_ptr_.back() - colour_ptr_.front();
-    if (total >= parallel_grains().colour * nc && team_size() > 1) {
+    if (total >= kSerialColourRows * nc && team_size() > 1) {
 #pragma omp parallel
       {
         const Index t = omp_get_thread_num(), T = omp_get_num_threads();

@@ -82,13 +82,6 @@ void restrict_residual(const Prolongation<d>& P, const std::uint8_t* mask, const
   restrict_of<d>(P, mask, [&](Index i) { return Vec<d>(CVecMap<d>(rf + d * i)); }, yc, scratch);
 }
 
-// Tests and benchmarks: when cleared, the cycles form every residual of a level as a vector first
-// and restrict that (as before issue 15's fused pass); the two give the same bits.
-inline bool& fused_residual_restriction() {
-  static bool on = true;
-  return on;
-}
-
 // y_coarse = P^T (b - A x) in one pass over A: each row's residual restricted as it is formed
 // (BlockMatrix::residual_row), never stored -- a level's residual pass wrote a vector that the
 // restriction read straight back (32 of the ~290 bytes a row of a 2D coarse level streamed;
@@ -96,14 +89,13 @@ inline bool& fused_residual_restriction() {
 template <int d>
 void restrict_level_residual(const BlockMatrix<d>& A, const Prolongation<d>& P, const double* x, const double* b, double* yc,
                              double* scratch) {
-  const Index ahead = prefetch_value_rows();
-  A.with_values([&](const auto* vals) {
-    restrict_of<d>(P, nullptr, [&](Index i) {
-      Vec<d> s;
-      A.residual_row(vals, x, b, i, ahead, s.data());
-      return s;
-    }, yc, scratch);
-  });
+  constexpr Index ahead = kPrefetchValueRows;
+  const double* vals = A.values.data();
+  restrict_of<d>(P, nullptr, [&](Index i) {
+    Vec<d> s;
+    A.residual_row(vals, x, b, i, ahead, s.data());
+    return s;
+  }, yc, scratch);
 }
 
 }  // namespace cmg

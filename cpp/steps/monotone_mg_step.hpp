@@ -47,14 +47,9 @@ struct BuiltLinearization {
 // more once a Coulomb solve slides). A solver keeps one across its solves (contact_solver.hpp):
 // a fresh step per solve allocated them again, 8 fine vectors of pages first touched inside the
 // solve (at level 9, 37,000 minor faults a solve, ~2,900 a cycle; the Anderson slots' in its
-// "norm" phase). On this project's VM a first touch of memory the guest had handed back costs up
-// to ~50 us a page (0.4-0.5 s of system time a cycle while the history filled): issue 15.
-// Tests and benchmarks: false gives every solve a fresh workspace again (as before), to compare the
-// two in one process.
-inline bool& keep_cycle_workspace() {
-  static bool keep = true;
-  return keep;
-}
+// "norm" phase). On a VM a first touch of memory the guest had handed back costs up to ~50 us a
+// page (0.4-0.5 s of system time a cycle while the history filled;
+// docs/dev/decisions/0009-kept-cycle-workspace.md).
 
 struct CycleWorkspace {
   std::vector<double> r, old;
@@ -108,12 +103,9 @@ class MonotoneMultigridStep {
     // the friction gradient), every other row where the coarse correction restricts it, formed as
     // it is restricted (BlockMatrix::residual_row): a residual pass wrote a fine vector that the
     // restriction read straight back (issue 15). The same sums: the same bits as a residual pass.
-    const Index ahead = prefetch_value_rows();
-    const bool fused = fused_residual_restriction();
-    if (!fused) A.residual(u.data(), f.data(), r_.data());
-    else
-      for (Index c = 0; c < P_.num_contact(); ++c)
-        A.residual_row(A.values.data(), u.data(), f.data(), P_.contact_node(c), ahead, r_.data() + d * P_.contact_node(c));
+    constexpr Index ahead = kPrefetchValueRows;
+    for (Index c = 0; c < P_.num_contact(); ++c)
+      A.residual_row(A.values.data(), u.data(), f.data(), P_.contact_node(c), ahead, r_.data() + d * P_.contact_node(c));
     const bool bounded = linearize();
     upwind_.order_from(P_, coupling_);
     pc.lap(Phase::Linearize);
@@ -128,7 +120,7 @@ class MonotoneMultigridStep {
     const std::uint8_t* flags = P_.row_flags();
     const auto fine_residual = [&](Index i) {
       Vec<d> s;
-      if (!fused || (flags[i] & ContactProblem<d>::kContactRow)) s = CVecMap<d>(r_.data() + d * i);
+      if (flags[i] & ContactProblem<d>::kContactRow) s = CVecMap<d>(r_.data() + d * i);
       else A.residual_row(A.values.data(), u.data(), f.data(), i, ahead, s.data());
       return s;
     };
@@ -318,7 +310,7 @@ class MonotoneMultigridStep {
   // changed). The same sums over the same chunks as the norm pass of iterate().
   double change_norm_squared(const std::vector<double>& x, const std::vector<double>& y, double* z) const {
     const BlockMatrix<d>& A = P_.matrix();
-    const Index ahead = prefetch_value_rows();
+    constexpr Index ahead = kPrefetchValueRows;
     return parallel_sum(A.rows, [&](Index i) {
       A.prefetch_ahead(i, y.data(), x.data());
       prefetch_row_values<d>(A.values.data(), A.indptr.data(), i, ahead, A.rows);

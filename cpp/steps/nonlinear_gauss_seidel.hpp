@@ -8,21 +8,15 @@
 
 namespace cmg {
 
-// Tests and diagnostics: when set, every fine sweep takes the per-row path (row_update) instead of
-// the range kernel; the two must agree bit for bit (tests/test_fine_sweep_kernel.py).
-inline bool& fine_sweep_generic() {
-  static bool generic = false;
-  return generic;
-}
-
 template <int d, class L>
 struct NonlinearGaussSeidel {
   // omega: the over-relaxation of the rows without contact (< 0: the problem's smoothing_omega();
-  // SolverOptions::omega_post gives the post-smoothing sweeps their own).
+  // SolverOptions::omega_post gives the post-smoothing sweeps their own). per_row: every row through
+  // row_update, also on a level stored by colours (tests compare it with the range kernel).
   static void sweep(const ContactProblem<d>& P, double* u, bool forward, const SweepOrder& order = SweepOrder(),
-                    double omega = -1.0) {
+                    double omega = -1.0, bool per_row = false) {
     if (!(omega > 0)) omega = P.smoothing_omega();
-    if (order.contiguous() && !fine_sweep_generic()) {
+    if (order.contiguous() && !per_row) {
       order.visit_ranges(forward, [&](Index b, Index e) { sweep_range(P, u, b, e, omega); });
       return;
     }
@@ -62,7 +56,7 @@ struct NonlinearGaussSeidel {
     // law::Linear has no contact rows: its contact nodes only carry frames (row_update's c < 0)
     const std::uint8_t other = L::has_contact ? (CP::kSpecialInverse | CP::kContactRow) : CP::kSpecialInverse;
     const Index n = A.rows;
-    const Index ahead = prefetch_value_rows();
+    constexpr Index ahead = kPrefetchValueRows;
     for (Index i = b; i < e; ++i) {
       if (i + kPrefetchRows < n) prefetch_block_columns<d>(cols, ptr[i + kPrefetchRows], ptr[i + kPrefetchRows + 1], u);
       prefetch_row_values<d>(values, ptr, i, ahead, n);

@@ -527,8 +527,7 @@ class ContactProblem:
                 self.hierarchy.release_coarse()
                 self._release_vectors()
                 # made for one solve: the cycles' workspace need not outlive it (the lower peak)
-                if hasattr(self._solvers[key], "_keep_cycle_workspace"):
-                    self._solvers[key]._keep_cycle_workspace(False)
+                self._solvers[key].keep_workspace(False)
         return self._solvers[key]
 
     def memory_bytes(self) -> Dict[str, int]:
