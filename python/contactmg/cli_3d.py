@@ -180,21 +180,38 @@ def run_cork(args) -> int:
     report["push_force"] = cork.push_force(problem, result)
     report["material"] = {"E": problem.material.E, "nu": problem.material.nu}
     if args.picture:
-        import matplotlib
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-
-        from .plots_3d import plot_cork
-
-        fig = plt.figure(figsize=(6, 7))
-        ax = fig.add_subplot(projection="3d")
-        plot_cork(problem, result, ax=ax, neck=cork.neck())
-        _save(fig, args.picture)
+        write_cork_picture(problem, result, args, args.picture)
     code = _finish(args, report, result, "cork", path)
     if not args.quiet:
         stream = sys.stderr if args.json == "-" else sys.stdout
         print(f"  push force {report['push_force']:.6g} N for D = {args.push} mm", file=stream)
     return code
+
+
+def cork_figure(problem, result, friction: float, push: float):
+    """The cork's picture (a matplotlib Figure, not attached to pyplot): the deformed cork in 3D
+    coloured by contact state (left) and its side against the neck's tapered wall in a meridian
+    section coloured by contact pressure (right; lengths in mm, stresses in MPa, the cork's units).
+    Returns (figure, 3D axes, section axes)."""
+    from matplotlib.figure import Figure
+
+    from . import cork
+    from .plots_3d import plot_cork, plot_cork_section
+
+    fig = Figure(figsize=(13, 7.5), layout="constrained")
+    ax3 = fig.add_subplot(1, 2, 1, projection="3d")
+    ax2 = fig.add_subplot(1, 2, 2)
+    neck = cork.neck()
+    plot_cork(problem, result, ax=ax3, neck=neck)
+    plot_cork_section(result, neck, ax=ax2, radius=cork.RADIUS)
+    fig.suptitle(f"cork pushed {push:g} mm into the neck, F = {friction:g}", fontsize=12)
+    return fig, ax3, ax2
+
+
+def write_cork_picture(problem, result, args, path) -> None:
+    """`cork --picture PATH`: cork_figure written to PATH."""
+    fig, _, _ = cork_figure(problem, result, args.friction, args.push)
+    fig.savefig(path, dpi=120)
 
 
 COMMANDS = {"sphere": run_sphere, "cork": run_cork}
