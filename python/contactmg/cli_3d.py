@@ -13,42 +13,55 @@ MAX_LEVELS_3D = 7
 def _common(p, levels_default):
     p.add_argument("--levels", type=cli._positive_int("--levels", 1, MAX_LEVELS_3D), default=levels_default,
                    help="levels in all; level 1 is the coarse mesh")
-    p.add_argument("--friction", type=cli._nonneg_float("--friction"), default=0.4)
-    p.add_argument("--method", choices=["nmg", "fixed-point", "linear", "tnnmg"], default="nmg")
-    p.add_argument("--tol", type=cli._nonneg_float("--tol", positive=True), default=1e-11)
-    p.add_argument("--max-cycles", type=cli._positive_int("--max-cycles"), default=200)
-    p.add_argument("--cycle", choices=["V", "W", "F"], default="F")
-    p.add_argument("--nu1", type=cli._positive_int("--nu1", 0, 100), default=3)
-    p.add_argument("--nu2", type=cli._positive_int("--nu2", 0, 100), default=3)
+    p.add_argument("--friction", type=cli._nonneg_float("--friction"), default=0.4,
+                   help="Coulomb friction coefficient F (0: frictionless)")
+    p.add_argument("--method", choices=["nmg", "fixed-point", "linear", "tnnmg"], default="nmg",
+                   help="nmg: Algorithm 2 (nonlinear multigrid); fixed-point: Algorithm 1; linear: the cost "
+                        "reference; tnnmg: truncated nonsmooth Newton multigrid")
+    p.add_argument("--tol", type=cli._nonneg_float("--tol", positive=True), default=1e-11,
+                   help="stop when the correction's energy norm ||u^{k+1} - u^k||_A falls below this")
+    p.add_argument("--max-cycles", type=cli._positive_int("--max-cycles"), default=200,
+                   help="stop as not converged after this many cycles")
+    p.add_argument("--cycle", choices=["V", "W", "F"], default="F", help="multigrid cycle type")
+    p.add_argument("--nu1", type=cli._positive_int("--nu1", 0, 100), default=3, help="pre-smoothing steps per level")
+    p.add_argument("--nu2", type=cli._positive_int("--nu2", 0, 100), default=3, help="post-smoothing steps per level")
     cli.add_thread_options(p)
-    p.add_argument("--json", type=cli._writable, metavar="PATH|-")
-    p.add_argument("--vtu", type=cli._with_suffix("--vtu", (".vtu",)), metavar="PATH")
-    p.add_argument("-q", "--quiet", action="store_true")
+    p.add_argument("--json", type=cli._writable, metavar="PATH|-",
+                   help="write the report as JSON to PATH (-: standard output)")
+    p.add_argument("--vtu", type=cli._with_suffix("--vtu", (".vtu",)), metavar="PATH",
+                   help="write the mesh with displacement, stresses and contact states (ParaView)")
+    p.add_argument("-q", "--quiet", action="store_true", help="print nothing but errors")
 
 
 def add_parsers(sub) -> None:
     from . import cork, sphere
 
     s = sub.add_parser("sphere", help="the Hertz sphere: a half ball pressed onto a rigid plane (3D)")
-    s.add_argument("--cell", choices=["tetra", "hexahedron"], default="hexahedron")
+    s.add_argument("--cell", choices=["tetra", "hexahedron"], default="hexahedron", help="tetrahedra or hexahedra")
     _common(s, sphere.DEFAULT_LEVELS)
-    s.add_argument("--displacement", type=cli._nonneg_float("--displacement", positive=True), default=sphere.DISPLACEMENT)
+    s.add_argument("--displacement", type=cli._nonneg_float("--displacement", positive=True), default=sphere.DISPLACEMENT,
+                   help="displacement D of the flat top towards the plane")
     s.add_argument("--hierarchy", choices=list(sphere.HIERARCHIES), default="uniform",
                    help="adaptive: refined by the hierarchical estimator and bisection (tetra only)")
-    s.add_argument("--plot", type=cli._with_suffix("--plot", PLOT_SUFFIXES), metavar="PATH")
+    s.add_argument("--plot", type=cli._with_suffix("--plot", PLOT_SUFFIXES), metavar="PATH",
+                   help="write the contact stresses against the distance from the axis (.png, .pdf or .svg)")
     cli.add_path_arguments(s)
     c = sub.add_parser("cork", help="the cork pushed into a narrowing bottle neck (3D, Figure 2 right)")
     _common(c, cork.DEFAULT_LEVELS)
-    c.add_argument("--push", type=cli._nonneg_float("--push"), default=cork.PUSH)
-    c.add_argument("--picture", type=cli._with_suffix("--picture", PLOT_SUFFIXES), metavar="PATH")
+    c.add_argument("--push", type=cli._nonneg_float("--push"), default=cork.PUSH,
+                   help="distance D the plunger pushes the cork's top down (mm)")
+    c.add_argument("--picture", type=cli._with_suffix("--picture", PLOT_SUFFIXES), metavar="PATH",
+                   help="write the picture of the deformed cork and a section against the neck (.png, .pdf or .svg)")
     # load path: push in (--steps), then pull the plunger back to where it started
     c.add_argument("--steps", type=cli._positive_int("--steps", 1, 100000), default=None,
                    help="load path: the push in N equal increments (incremental Coulomb law)")
     c.add_argument("--pull-back", action="store_true", help="after the push, move the top back to its start")
     c.add_argument("--pull-back-steps", dest="shear_steps", type=cli._positive_int("--pull-back-steps", 1, 100000),
                    default=None, help="increments of the pull-back (default 1)")
-    c.add_argument("--series", type=cli._with_suffix("--series", (".pvd",)), metavar="PATH")
-    c.add_argument("--zone-plot", type=cli._with_suffix("--zone-plot", PLOT_SUFFIXES), metavar="PATH")
+    c.add_argument("--series", type=cli._with_suffix("--series", (".pvd",)), metavar="PATH",
+                   help="load path: a ParaView time series (.pvd collection of VTU files, one per step)")
+    c.add_argument("--zone-plot", type=cli._with_suffix("--zone-plot", PLOT_SUFFIXES), metavar="PATH",
+                   help="load path: the stick and slip zones against the load step")
 
 
 def _report(args, problem, result, name) -> dict:
