@@ -90,6 +90,44 @@ def test_cork_json_and_picture(tmp_path):
     assert pic.stat().st_size > 20000
 
 
+def test_cork_json_reports_what_its_zones_measure(tmp_path, cork_level2):
+    out = tmp_path / "c.json"
+    assert main(["cork", "--levels", "2", "--json", str(out), "-q"]) == 0
+    d = json.loads(out.read_text())
+    # the contract's half-widths stay, null: the largest |x| of a zone node is the cork's radius
+    assert d["contact_halfwidth"] is None and d["stick_halfwidth"] is None
+    assert "contact_radius" not in d and "stick_radius" not in d
+    # the zones as bands around the side: areas from the nodes' shares of the side, heights
+    prob, res = cork_level2  # the same solve, in this process (tol 1e-10: the same states)
+    side = 2 * np.pi * cork.RADIUS * cork.LENGTH
+    on, stick = res.contact_state > 0, res.contact_state == STICK
+    assert d["contact_nodes"] == on.sum() and d["stick_nodes"] == stick.sum()
+    assert d["contact_area"] == pytest.approx(res.measure[on].sum(), rel=1e-12)
+    assert d["stick_area"] == pytest.approx(res.measure[stick].sum(), rel=1e-12)
+    assert d["stick_area"] + d["slip_area"] == pytest.approx(d["contact_area"], rel=1e-12)
+    assert 0 < d["stick_area"] < d["contact_area"] < side
+    z = res.mesh.points[res.contact_nodes, 2]
+    assert d["contact_z_range"] == [z[on].min(), z[on].max()] and d["stick_z_range"] == [z[stick].min(), z[stick].max()]
+    assert d["contact_length"] == pytest.approx(z[on].max() - z[on].min())
+    # the cork is squeezed below the taper's top (z = 20), sticks at the bottom and slides above
+    assert d["contact_z_range"][0] == 0.0 and d["contact_z_range"][1] < cork.TAPER_TOP
+    assert 0 < d["stick_length"] < d["contact_length"]
+    # the band is about as large as its circumference times its length (one node spacing more)
+    assert d["contact_area"] == pytest.approx(2 * np.pi * cork.RADIUS * d["contact_length"], rel=0.3)
+
+
+def test_cork_load_path_steps_report_the_zone_measures(capsys):
+    assert main(["cork", "--levels", "2", "--steps", "2", "--json", "-"]) == 0
+    captured = capsys.readouterr()
+    d = json.loads(captured.out)
+    for row in d["steps"]:
+        assert row["contact_halfwidth"] is None and row["stick_halfwidth"] is None
+        assert "contact_radius" not in row
+        assert 0 < row["stick_area"] < row["contact_area"] and row["contact_length"] > 0
+    assert d["steps"][-1]["contact_area"] == d["contact_area"]
+    assert "stick area per step" in captured.err
+
+
 def test_cork_picture_is_drawn_from_the_node_states(cork_level2):
     prob, res = cork_level2
     fig = plt.figure()

@@ -161,11 +161,27 @@ def run_sphere(args) -> int:
     return code
 
 
+def cork_report(args, problem, result) -> dict:
+    """The keys of `contactmg hertz` for the cork, whose zones are bands around its side: the
+    half-widths (largest |x| of a zone node: the cork's radius, whatever the zone) are null, and
+    cork.zone_measures gives what the zones measure (contact_area, stick_area, slip_area,
+    contact_length, stick_length, contact_z_range, stick_z_range)."""
+    from . import cork
+
+    out = cli.hertz_report(args, problem, result)
+    for k in ("hertz_halfwidth", "hertz_peak_pressure"):
+        out.pop(k, None)
+    out["problem"] = "cork"
+    out["contact_halfwidth"] = out["stick_halfwidth"] = None
+    out.update(cork.zone_measures(result))
+    return out
+
+
 def run_cork(args) -> int:
     from . import cork
 
     args.cell = "hexahedron"
-    from . import cli_path, sphere
+    from . import cli_path
     from .generators_3d import CORK_TOP
 
     args.shear = None  # the cork's second phase is the pull-back
@@ -184,11 +200,13 @@ def run_cork(args) -> int:
     else:
         result = problem.solve(args.method, tol=args.tol, max_cycles=args.max_cycles, threads=args.threads,
                                ordering=args.ordering)
-    report = _report(args, problem, result, "cork")
+    report = cork_report(args, problem, result)
     if path is not None:
-        cli_path.report(args, path, report, zone=lambda r, states: sphere.radius_of(r, states), radii=True)
+        # the contract's zone keys stay, null: the zones are bands around the side (zone_measures)
+        cli_path.report(args, path, report, zone=lambda r, states: None)
         for row, r in zip(report["steps"], path.steps):
             row["push_force"] = cork.push_force(problem, r)
+            row.update(cork.zone_measures(r))
     report["push"] = args.push
     report["push_force"] = cork.push_force(problem, result)
     report["material"] = {"E": problem.material.E, "nu": problem.material.nu}
