@@ -281,6 +281,9 @@ def plot_cycles(records, method: str, ax=None, frictions: Optional[Iterable[floa
     ymax = max(counts, default=1.0)
     # a band above the largest count holds the failures' marks: no mark sits on a count
     ax.set_ylim(0, _FAIL_BAND_SCALE * ymax)
+    from matplotlib.ticker import MaxNLocator
+
+    ax.yaxis.set_major_locator(MaxNLocator(integer=True))  # cycles are counted
     if failed:
         from matplotlib.transforms import blended_transform_factory
 
