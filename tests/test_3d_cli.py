@@ -14,7 +14,7 @@ import pytest  # noqa: E402
 from contactmg import cork, sphere  # noqa: E402
 from contactmg.cli import main  # noqa: E402
 from contactmg.plots_3d import (FREE_COLOR, SLIP_COLOR, STICK_COLOR, face_states, plot_cork,  # noqa: E402
-                                plot_radial_stress, radial_stress_data)
+                                plot_cork_section, plot_radial_stress, radial_stress_data)
 from contactmg.results import FREE, SLIP, STICK  # noqa: E402
 
 KEYS = ["problem", "dim", "cell", "levels", "nodes", "dofs", "method", "friction", "tol", "converged", "cycles",
@@ -90,9 +90,46 @@ def test_cork_json_and_picture(tmp_path):
     assert pic.stat().st_size > 20000
 
 
-def test_cork_picture_is_drawn_from_the_node_states():
-    prob = cork.cork_problem(2, 0.4)
-    res = prob.solve(tol=1e-10)
+def test_cork_json_reports_what_its_zones_measure(tmp_path, cork_level2):
+    out = tmp_path / "c.json"
+    assert main(["cork", "--levels", "2", "--json", str(out), "-q"]) == 0
+    d = json.loads(out.read_text())
+    # the contract's half-widths stay, null: the largest |x| of a zone node is the cork's radius
+    assert d["contact_halfwidth"] is None and d["stick_halfwidth"] is None
+    assert "contact_radius" not in d and "stick_radius" not in d
+    # the zones as bands around the side: areas from the nodes' shares of the side, heights
+    prob, res = cork_level2  # the same solve, in this process (tol 1e-10: the same states)
+    side = 2 * np.pi * cork.RADIUS * cork.LENGTH
+    on, stick = res.contact_state > 0, res.contact_state == STICK
+    assert d["contact_nodes"] == on.sum() and d["stick_nodes"] == stick.sum()
+    assert d["contact_area"] == pytest.approx(res.measure[on].sum(), rel=1e-12)
+    assert d["stick_area"] == pytest.approx(res.measure[stick].sum(), rel=1e-12)
+    assert d["stick_area"] + d["slip_area"] == pytest.approx(d["contact_area"], rel=1e-12)
+    assert 0 < d["stick_area"] < d["contact_area"] < side
+    z = res.mesh.points[res.contact_nodes, 2]
+    assert d["contact_z_range"] == [z[on].min(), z[on].max()] and d["stick_z_range"] == [z[stick].min(), z[stick].max()]
+    assert d["contact_length"] == pytest.approx(z[on].max() - z[on].min())
+    # the cork is squeezed below the taper's top (z = 20), sticks at the bottom and slides above
+    assert d["contact_z_range"][0] == 0.0 and d["contact_z_range"][1] < cork.TAPER_TOP
+    assert 0 < d["stick_length"] < d["contact_length"]
+    # the band is about as large as its circumference times its length (one node spacing more)
+    assert d["contact_area"] == pytest.approx(2 * np.pi * cork.RADIUS * d["contact_length"], rel=0.3)
+
+
+def test_cork_load_path_steps_report_the_zone_measures(capsys):
+    assert main(["cork", "--levels", "2", "--steps", "2", "--json", "-"]) == 0
+    captured = capsys.readouterr()
+    d = json.loads(captured.out)
+    for row in d["steps"]:
+        assert row["contact_halfwidth"] is None and row["stick_halfwidth"] is None
+        assert "contact_radius" not in row
+        assert 0 < row["stick_area"] < row["contact_area"] and row["contact_length"] > 0
+    assert d["steps"][-1]["contact_area"] == d["contact_area"]
+    assert "stick area per step" in captured.err
+
+
+def test_cork_picture_is_drawn_from_the_node_states(cork_level2):
+    prob, res = cork_level2
     fig = plt.figure()
     ax = fig.add_subplot(projection="3d")
     plot_cork(prob, res, ax=ax, neck=cork.neck())
@@ -111,6 +148,60 @@ def test_cork_picture_is_drawn_from_the_node_states():
         drawn = np.all(np.isclose(fc, matplotlib.colors.to_rgba(color)), axis=1).sum()
         assert drawn == np.sum(expect == state), (state, drawn)
     plt.close(fig)
+
+
+@pytest.fixture(scope="module")
+def cork_level2():
+    prob = cork.cork_problem(2, 0.4)
+    return prob, prob.solve(tol=1e-10)
+
+
+def test_cork_section_draws_the_tapered_wall_and_the_pressure(cork_level2):
+    _, res = cork_level2
+    neck = cork.neck()
+    fig, ax = plt.subplots()
+    plot_cork_section(res, neck, ax=ax, radius=cork.RADIUS)
+    # the wall's line is the obstacle's radius function: it narrows below z = 20 (the taper)
+    (wall,) = [ln for ln in ax.get_lines() if ln.get_label() == "neck wall"]
+    z = np.asarray(wall.get_ydata())
+    np.testing.assert_allclose(wall.get_xdata(), neck.radius(z), rtol=1e-14)
+    assert z.min() < 0 and z.max() > cork.LENGTH
+    np.testing.assert_allclose(neck.radius(np.array([0.0, cork.TAPER_TOP, cork.LENGTH])),
+                               [cork.RADIUS - cork.INTERFERENCE, cork.RADIUS + cork.CLEARANCE, cork.RADIUS + cork.CLEARANCE])
+    # the r axis is zoomed so that the taper (0.3 mm over 20 mm) spans a good part of it
+    lo, hi = ax.get_xlim()
+    assert hi - lo < 2.0 and (cork.CLEARANCE + cork.INTERFERENCE) / (hi - lo) > 0.3
+    # the nodes in contact sit at their deformed (r, z), coloured by their contact pressure
+    x = res.mesh.points[res.contact_nodes] + res.displacement[res.contact_nodes]
+    on = res.contact_state > 0
+    drawn = [c for c in ax.collections if c.get_gid() == "in contact"]
+    offsets = np.vstack([c.get_offsets() for c in drawn])
+    values = np.concatenate([c.get_array() for c in drawn])
+    want = np.column_stack([np.hypot(x[on, 0], x[on, 1]), x[on, 2]])
+    order = lambda a: np.lexsort(a.T[::-1])  # noqa: E731
+    np.testing.assert_allclose(offsets[order(offsets)], want[order(want)], rtol=1e-12)
+    np.testing.assert_allclose(np.sort(values), np.sort(-res.normal_stress[on]), rtol=1e-12)
+    assert np.all(values > 0)
+    # in contact means on the wall: the deformed radius is the wall's there (no penetration)
+    np.testing.assert_allclose(want[:, 0], neck.radius(want[:, 1]), atol=1e-6)
+    # the colour bar says what the colours are, with the unit
+    (cbar,) = [c.colorbar for c in drawn if c.colorbar is not None]
+    assert cbar.ax.get_ylabel() == "contact pressure $-\\sigma_n$ (MPa)"
+    # one colour scale for stick and slip markers, from 0 to the largest pressure
+    assert {c.get_clim() for c in drawn} == {(0.0, float(values.max()))}
+    assert ax.get_xlabel() == "distance from the axis r (mm)" and ax.get_ylabel() == "height z (mm)"
+    plt.close(fig)
+
+
+def test_cork_picture_has_units_and_a_key(cork_level2):
+    from contactmg.cli_3d import cork_figure
+
+    prob, res = cork_level2
+    fig, ax3, ax2 = cork_figure(prob, res, 0.4, cork.PUSH)
+    assert [ax3.get_xlabel(), ax3.get_ylabel(), ax3.get_zlabel()] == ["x (mm)", "y (mm)", "z (mm)"]
+    assert [t.get_text() for t in ax3.get_legend().get_texts()] == ["stick", "slip", "no contact"]
+    assert any(a.get_ylabel().startswith("contact pressure") and a.get_ylabel().endswith("(MPa)") for a in fig.axes)
+    assert "neck wall" in [ln.get_label() for ln in ax2.get_lines()]
 
 
 def test_radial_stress_plot_data():

@@ -173,3 +173,53 @@ def test_ctrl_c_inside_the_cycles_stops_the_solve():
     assert p.returncode == 130 and "interrupted after" in out and "Traceback" not in err, (out, err)
     cycles = int(out.split(", ")[1].split()[0])
     assert cycles >= 2 and out.strip().endswith("then 2"), out
+
+
+def _help(command, capsys):
+    from contactmg.cli import main
+
+    with pytest.raises(SystemExit) as e:
+        main([command, "--help"])
+    assert e.value.code == 0
+    # argparse wraps at the terminal width: one line per option's text
+    return " ".join(capsys.readouterr().out.split())
+
+
+@pytest.mark.parametrize("command,shown", [
+    ("hertz", ["--levels LEVELS levels in all; level 1 is the coarse mesh (default: 6)",
+               "(0: frictionless) (default: 0.4)", "(default: nmg)", "(default: 1e-11)", "(default: triangle)",
+               "(default: 200)", "(default: F)", "(default: uniform)"]),
+    ("table1", ["(default: 3 5 7 9 11 on the adaptive hierarchy", "(default: the paper's ten",
+                "(default: triangle)"]),
+    ("sphere", ["(default: 0.4)", "(default: hexahedron)", "(default: nmg)", "(default: 1e-11)", "(default: 0.02)"]),
+    ("cork", ["(default: 0.4)", "(default: nmg)", "(default: 3)", "(mm) (default: 0.2)"]),
+    ("cylinders", ["(0: frictionless) (default: 0.4)", "(default: 5)", "(default: 2000.0)", "(default: 0.28)"]),
+    ("spheres", ["(0: frictionless) (default: 0.4)", "(default: hexahedron)", "(default: 3)"]),
+])
+def test_help_shows_the_defaults(command, shown, capsys):
+    text = _help(command, capsys)
+    for s in shown:
+        assert s in text, (s, text)
+    # no option with a value to show goes without it
+    from contactmg.cli import _parser
+
+    sub = next(a for a in _parser()._actions if a.dest == "command").choices[command]
+    for action in sub._actions:
+        if action.option_strings and action.default not in (None, False) and action.dest != "help":
+            assert "default" in (sub.formatter_class("x")._get_help_string(action) or ""), action.dest
+
+
+@pytest.mark.parametrize("command", ["hertz", "sphere", "cork", "cylinders", "spheres"])
+def test_every_solve_command_defaults_to_friction_0_4(command):
+    from contactmg.cli import _parser
+
+    args = _parser().parse_args([command])
+    assert args.friction == 0.4
+
+
+def test_cylinders_without_friction_option_solves_with_coulomb_0_4(tmp_path):
+    r = run("cylinders", "--levels", "3", "--json", "-", "-q", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    d = json.loads(r.stdout)
+    # friction holds some nodes (frictionless, every node in contact slides)
+    assert d["friction"] == 0.4 and d["stick_nodes"] > 0

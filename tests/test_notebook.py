@@ -1,4 +1,4 @@
-"""The stick/slip notebook executes and its numbers make sense."""
+"""The stick/slip notebook executes, shows its figures and its numbers make sense."""
 import json
 from pathlib import Path
 
@@ -24,7 +24,15 @@ def _kernel_name():
         pytest.skip("no python3 Jupyter kernel: run `python -m ipykernel install --user`")
 
 
-def test_stick_slip_notebook_executes():
+# the cells that draw: the stresses for four F, the tangential stress over the levels, the
+# correction histories, Figure 1
+PLOTTING_CELLS = 4
+
+
+def test_stick_slip_notebook_executes(monkeypatch):
+    # a non-interactive backend in the environment (as on a test machine) must not hide the
+    # figures: the notebook selects the inline backend itself
+    monkeypatch.setenv("MPLBACKEND", "Agg")
     nb = nbformat.read(NOTEBOOK, as_version=4)
     client = nbclient.NotebookClient(nb, timeout=300, kernel_name=_kernel_name(),
                                      resources={"metadata": {"path": str(NOTEBOOK.parent)}})
@@ -32,6 +40,15 @@ def test_stick_slip_notebook_executes():
     for cell in nb.cells:
         for out in cell.get("outputs", []):
             assert out.get("output_type") != "error", out
+    # every cell that creates a figure shows it as a picture, one picture per figure
+    drawing = [c for c in nb.cells if c.cell_type == "code" and ("plt.subplots" in c.source or "plot_" in c.source)
+               and "import" not in c.source]
+    assert len(drawing) == PLOTTING_CELLS
+    for cell in drawing:
+        pngs = [o for o in cell.outputs if o.get("output_type") == "display_data" and "image/png" in o.get("data", {})]
+        assert len(pngs) == 1, cell.source[:80]
+        assert len(pngs[0]["data"]["image/png"]) > 10000  # a picture, not an empty canvas
+    assert not any("matplotlib.use(" in c.source for c in nb.cells if c.cell_type == "code")
     last = [o for o in nb.cells[-1]["outputs"] if o.get("name") == "stdout"][0]["text"]
     summary = json.loads(last)
 

@@ -151,33 +151,115 @@ def test_table_image_shows_the_numbers(vcycles):
         assert cells[(1, 2)].get_text().get_text() == "8 (77/17)"
 
 
-def test_convergence_plot_from_a_table_and_from_records():
+def lines_by_label(ax):
+    return {ln.get_label(): ln for ln in ax.get_lines()}
+
+
+def failure_marks(ax):
+    """(x in data, y in axes coordinates) of the "not converged" marks of a Figure 1 panel."""
+    (marks,) = [c for c in ax.collections if c.get_label() == plots.NOT_CONVERGED_LABEL]
+    return np.asarray(marks.get_offsets())
+
+
+def test_convergence_plot_draws_each_algorithm_apart_from_a_table():
     tab = fake_table()
-    ax = plots.plot_convergence(tab)
-    assert ax.get_xscale() == "log"
-    for i, F in enumerate(tab["frictions"]):
-        for name, key, color in (("Alg. 1", "fixed_point_vcycles", "tab:blue"), ("Alg. 2", "nmg_vcycles", "tab:red")):
-            (ln,) = [ln for ln in ax.get_lines() if ln.get_label() == f"{name}, F={F:g}"]
-            assert to_rgb(ln.get_color()) == to_rgb(color)
+    ax1, ax2 = plots.plot_convergence(tab)
+    assert ax1 is not ax2 and "Algorithm 1" in ax1.get_title() and "Algorithm 2" in ax2.get_title()
+    styles = plots.friction_styles(tab["frictions"])
+    for ax, key in ((ax1, "fixed_point_vcycles"), (ax2, "nmg_vcycles")):
+        assert ax.get_xscale() == "log" and ax.get_xlabel() == "number of nodes"
+        assert "cycles" in ax.get_ylabel() and "F(3,3)" in ax.get_ylabel()
+        lines = lines_by_label(ax)
+        assert set(lines) == {"F = 0.4", "F = 5"}  # one line per coefficient, nothing else
+        for i, F in enumerate(tab["frictions"]):
+            ln = lines[f"F = {F:g}"]
             np.testing.assert_array_equal(ln.get_xdata(), tab["nodes"])
-            np.testing.assert_array_equal(ln.get_ydata(), tab[key][i])
-    # the two failed fixed-point runs are ringed
-    (ring,) = ax.collections
-    np.testing.assert_array_equal(ring.get_offsets(), [[1225, 900], [4753, 1200]])
-    # an nmg run that is flagged by its violation is ringed too
+            assert to_rgb(ln.get_color()) == to_rgb(styles[F]["color"]) and ln.get_marker() == styles[F]["marker"]
+        # the same coefficient looks the same in both panels
+    assert {ln.get_label(): to_rgb(ln.get_color()) for ln in ax1.get_lines()} == \
+        {ln.get_label(): to_rgb(ln.get_color()) for ln in ax2.get_lines()}
+    # Algorithm 1: F = 0.4 converged everywhere; F = 5 failed on levels 4 and 5: its line holds
+    # the count of level 3 only (a failed run's stall count is not drawn) ...
+    l1 = lines_by_label(ax1)
+    np.testing.assert_array_equal(l1["F = 0.4"].get_ydata(), [37, 64, 77])
+    y5 = np.asarray(l1["F = 5"].get_ydata(), float)
+    assert y5[0] == 27 and np.all(np.isnan(y5[1:]))
+    assert ax1.get_ylim()[1] < 900  # the stall counts 900 and 1200 set no scale
+    # ... and the failures are marked at the top edge, above every count, in F = 5's colour
+    marks = failure_marks(ax1)
+    np.testing.assert_array_equal(marks[:, 0], [1225, 4753])
+    assert np.all(marks[:, 1] > 0.85) and np.all(marks[:, 1] <= 1.0)
+    assert np.all(marks[:, 1] * ax1.get_ylim()[1] > 77)
+    (coll,) = [c for c in ax1.collections if c.get_label() == plots.NOT_CONVERGED_LABEL]
+    assert all(to_rgb(c) == to_rgb(styles[5.0]["color"]) for c in coll.get_facecolors())
+    assert sorted(t.get_text() for t in ax1.texts) == ["F = 5", "F = 5"]
+    # Algorithm 2 converged everywhere: all counts, no marks, its own y scale
+    l2 = lines_by_label(ax2)
+    np.testing.assert_array_equal(l2["F = 5"].get_ydata(), [14, 16, 16])
+    assert not [c for c in ax2.collections if c.get_label() == plots.NOT_CONVERGED_LABEL]
+    assert ax2.get_ylim()[1] < 30
+    # one legend, readable, with an entry per coefficient and one for the failures
+    legend = ax2.get_legend()
+    assert [t.get_text() for t in legend.get_texts()] == ["F = 0.4", "F = 5", plots.NOT_CONVERGED_LABEL]
+    assert min(t.get_fontsize() for t in legend.get_texts()) >= 8
+    assert ax1.get_legend() is None
+
+
+def test_convergence_plot_marks_an_nmg_run_that_stopped_on_a_non_solution():
+    tab = fake_table()
     tab["nmg_violation"] = [[1e-12] * 3, [1e-12, 0.3, 1e-12]]
-    ax2 = plots.plot_convergence(tab)
-    np.testing.assert_array_equal(ax2.collections[0].get_offsets(), [[1225, 900], [4753, 1200], [1225, 16]])
-    # different F: different markers
-    assert len({ln.get_marker() for ln in ax.get_lines()}) == 2
+    _, ax2 = plots.plot_convergence(tab)
+    y = np.asarray(lines_by_label(ax2)["F = 5"].get_ydata(), float)
+    assert y[0] == 14 and np.isnan(y[1]) and y[2] == 16
+    np.testing.assert_array_equal(failure_marks(ax2)[:, 0], [1225])
+
+
+def test_friction_styles_tell_the_coefficients_apart():
+    Fs = [0.08, 0.4, 0.7, 0.9, 1.0, 1.1, 2.0, 5.0, 8.0, 40.0]
+    st = plots.friction_styles(reversed(Fs))
+    assert list(st) == Fs
+    assert len({to_rgb(v["color"]) for v in st.values()}) == 10 and len({v["marker"] for v in st.values()}) == 10
+    # a sequential map: the lightness grows with F
+    lum = [np.dot(to_rgb(st[F]["color"]), (0.299, 0.587, 0.114)) for F in Fs]
+    assert lum == sorted(lum)
+
+
+def test_cycles_panel_from_records():
     # records, e.g. JSON reports of `contactmg hertz`, unordered
     recs = [{"friction": 0.4, "nodes": n, "method": m, "cycles": c}
             for n, m, c in [(1225, "nmg", 16), (325, "nmg", 14), (325, "fixed-point", 37), (1225, "fixed-point", 64)]]
-    ax = plots.plot_convergence(recs)
-    (ln,) = [ln for ln in ax.get_lines() if ln.get_label() == "Alg. 1, F=0.4"]
+    ax = plots.plot_cycles(recs, "fixed-point")
+    (ln,) = ax.get_lines()
+    assert ln.get_label() == "F = 0.4"
     np.testing.assert_array_equal(ln.get_xdata(), [325, 1225])
     np.testing.assert_array_equal(ln.get_ydata(), [37, 64])
     assert not ax.collections
+    ax = plots.plot_cycles(recs + [{"friction": 2.0, "nodes": 325, "method": "nmg", "cycles": 200, "converged": False}],
+                           "nmg")
+    assert set(lines_by_label(ax)) == {"F = 0.4", "F = 2"}
+    assert np.isnan(lines_by_label(ax)["F = 2"].get_ydata()[0])
+    np.testing.assert_array_equal(failure_marks(ax)[:, 0], [325])
+    with pytest.raises(ValueError):
+        plots.plot_cycles(recs, "linear")
+
+
+def vertices_3d(collection):
+    """The (n, 3) vertices of a Poly3DCollection (matplotlib keeps them in a private field whose
+    name changed between versions)."""
+    if hasattr(collection, "_faces"):
+        return np.asarray(collection._faces, float).reshape(-1, 3)
+    return np.asarray(collection._vec[:3], float).T
+
+
+def bar_heights(ax):
+    """{(x, y) of the bar's corner: height} of the bars Axes3D.bar3d drew (their vertices)."""
+    out = {}
+    for c in ax.collections:
+        if c.get_gid() == plots.NOT_CONVERGED_LABEL:
+            continue
+        xyz = vertices_3d(c)
+        out[(round(xyz[:, 0].min(), 6), round(xyz[:, 1].min(), 6))] = xyz[:, 2].max()
+    return out
 
 
 def test_fixed_point_iterations_heatmap_and_bars():
@@ -191,9 +273,30 @@ def test_fixed_point_iterations_heatmap_and_bars():
     ax = plots.plot_fixed_point_iterations(tab)  # 3D bars
     assert ax.name == "3d"
     assert len(ax.collections) == 6
-    assert sorted(t.get_text() for t in ax.texts) == texts
+    # a bar per converged run, as high as its iterations; none where Algorithm 1 failed ...
+    assert bar_heights(ax) == {(0, 0): 4, (1, 0): 8, (2, 0): 8, (0, 1): 3}
+    # ... but a hatched tile on the floor, with a cross on it
+    tiles = [c for c in ax.collections if c.get_gid() == plots.NOT_CONVERGED_LABEL]
+    assert len(tiles) == 2 and all(c.get_hatch() for c in tiles)
+    corners = sorted((round(vertices_3d(c)[:, 0].min(), 6), round(vertices_3d(c)[:, 1].min(), 6)) for c in tiles)
+    assert corners == [(1, 1), (2, 1)] and all(np.allclose(vertices_3d(c)[:, 2], 0) for c in tiles)
+    assert ax.get_zlim()[1] < 10  # no fake height above the largest count (8)
+    assert sorted(t.get_text() for t in ax.texts) == sorted(["4", "8", "8", "3"] + [plots.NOT_CONVERGED_MARK] * 2)
+    assert plots.NOT_CONVERGED_LABEL in ax.get_legend().get_texts()[0].get_text()
+    assert ax.get_zlabel() == "outer iterations" and ax.get_xlabel() == "level" and "friction" in ax.get_ylabel()
+    ax = plots.plot_fixed_point_iterations(tab, annotate=False)  # the crosses stay
+    assert sorted(t.get_text() for t in ax.texts) == [plots.NOT_CONVERGED_MARK] * 2
     with pytest.raises(ValueError):
         plots.plot_fixed_point_iterations(tab, kind="pie")
+
+
+def test_table1_figure_has_its_panels():
+    tab = fake_table()
+    fig, axes = t1.table1_figure(tab)
+    assert set(axes) == {"table", "alg1", "alg2", "bars"}
+    assert axes["bars"].name == "3d" and axes["table"].tables
+    assert "Algorithm 1" in axes["alg1"].get_title() and "Algorithm 2" in axes["alg2"].get_title()
+    np.testing.assert_array_equal(lines_by_label(axes["alg2"])["F = 0.4"].get_ydata(), tab["nmg_vcycles"][0])
 
 
 def test_table1_keys_shapes_and_counts():
@@ -252,11 +355,11 @@ def test_command_line_table1(tmp_path):
     for k in ("fixed_point_vcycles", "nmg_vcycles", "fixed_point_iterations"):
         assert np.array(d[k]).shape == (2, 2), k
     assert all(f > n for fr, nr in zip(d["fixed_point_vcycles"], d["nmg_vcycles"]) for f, n in zip(fr, nr))
-    # one image with three panels side by side
+    # one image: Figure 1 left as two panels above Table 1 and Figure 1 right
     from PIL import Image
 
     w, h = Image.open(png).size
-    assert w > 2 * h
+    assert w > h > 0.5 * w
 
 
 def test_contact_conditions_detect_a_non_solution(hertz_f04):

@@ -132,41 +132,77 @@ def write_boundary_stress_plot(result, friction: float, path: str) -> None:
     plt.close(fig)
 
 
+class HelpFormatter(argparse.ArgumentDefaultsHelpFormatter):
+    """Every option's help ends with its default, "(default: 0.4)", unless the help already says
+    what the default is or there is none to show (no value, or a flag that is off)."""
+
+    def _get_help_string(self, action):
+        text = action.help or ""
+        if (not action.option_strings or action.default in (None, False, argparse.SUPPRESS)
+                or "default" in text.lower()):
+            return text
+        return (text + " " if text else "") + "(default: %(default)s)"
+
+
+class _Parser(argparse.ArgumentParser):
+    """An ArgumentParser whose help shows the defaults (HelpFormatter), for every subcommand."""
+
+    def __init__(self, *args, **kwargs):
+        kwargs.setdefault("formatter_class", HelpFormatter)
+        super().__init__(*args, **kwargs)
+
+
 def _parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="contactmg", description="Multigrid for elastic contact with Coulomb friction")
-    sub = p.add_subparsers(dest="command", required=True)
+    p = _Parser(prog="contactmg", description="Multigrid for elastic contact with Coulomb friction")
+    sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
     h = sub.add_parser("hertz", help="the Hertz benchmark of the seed paper")
-    h.add_argument("--cell", choices=["triangle", "quad"], default="triangle")
+    h.add_argument("--cell", choices=["triangle", "quad"], default="triangle",
+                   help="triangles (P1) or quadrilaterals (Q1)")
     h.add_argument("--levels", type=_positive_int("--levels", 1, MAX_LEVELS), default=6,
                    help="levels in all; level 1 is the coarse mesh")
-    h.add_argument("--friction", type=_nonneg_float("--friction"), default=0.4)
-    h.add_argument("--method", choices=["nmg", "fixed-point", "linear", "tnnmg"], default="nmg")
-    h.add_argument("--tol", type=_nonneg_float("--tol", positive=True), default=1e-11)
-    h.add_argument("--max-cycles", type=_positive_int("--max-cycles", 1, MAX_CYCLES), default=200)
-    h.add_argument("--cycle", choices=["V", "W", "F"], default="F")
-    h.add_argument("--nu1", type=_positive_int("--nu1", 0, 100), default=3)
-    h.add_argument("--nu2", type=_positive_int("--nu2", 0, 100), default=3)
-    h.add_argument("--hierarchy", choices=["uniform", "adaptive"], default="uniform")
+    h.add_argument("--friction", type=_nonneg_float("--friction"), default=0.4,
+                   help="Coulomb friction coefficient F (0: frictionless)")
+    h.add_argument("--method", choices=["nmg", "fixed-point", "linear", "tnnmg"], default="nmg",
+                   help="nmg: Algorithm 2 (nonlinear multigrid); fixed-point: Algorithm 1; linear: the cost "
+                        "reference; tnnmg: truncated nonsmooth Newton multigrid")
+    h.add_argument("--tol", type=_nonneg_float("--tol", positive=True), default=1e-11,
+                   help="stop when the correction's energy norm ||u^{k+1} - u^k||_A falls below this")
+    h.add_argument("--max-cycles", type=_positive_int("--max-cycles", 1, MAX_CYCLES), default=200,
+                   help="stop as not converged after this many cycles")
+    h.add_argument("--cycle", choices=["V", "W", "F"], default="F", help="multigrid cycle type")
+    h.add_argument("--nu1", type=_positive_int("--nu1", 0, 100), default=3, help="pre-smoothing steps per level")
+    h.add_argument("--nu2", type=_positive_int("--nu2", 0, 100), default=3, help="post-smoothing steps per level")
+    h.add_argument("--hierarchy", choices=["uniform", "adaptive"], default="uniform",
+                   help="uniform refinement, or adaptive (hierarchical estimator, newest-vertex bisection)")
     h.add_argument("--linear", choices=["pcg", "cycle", "coarse"], default=None,
                    help="the linear correction of --method tnnmg (default pcg: conjugate gradients with the "
                         "line-smoothed truncated linear cycle; coarse: the coarse levels alone)")
     add_thread_options(h)
-    h.add_argument("--json", type=_writable, metavar="PATH|-")
-    h.add_argument("--vtu", type=_with_suffix("--vtu", (".vtu",)), metavar="PATH")
-    h.add_argument("--plot", type=_with_suffix("--plot", PLOT_SUFFIXES), metavar="PATH")
+    h.add_argument("--json", type=_writable, metavar="PATH|-",
+                   help="write the report as JSON to PATH (-: standard output)")
+    h.add_argument("--vtu", type=_with_suffix("--vtu", (".vtu",)), metavar="PATH",
+                   help="write the mesh with displacement, stresses and contact states (ParaView)")
+    h.add_argument("--plot", type=_with_suffix("--plot", PLOT_SUFFIXES), metavar="PATH",
+                   help="write the boundary stresses with the stick and slip zones (.png, .pdf or .svg)")
     add_path_arguments(h)
-    h.add_argument("-q", "--quiet", action="store_true")
+    h.add_argument("-q", "--quiet", action="store_true", help="print nothing but errors")
     t = sub.add_parser("table1", help="Table 1 and Figure 1 of the paper: both algorithms over levels and F")
-    t.add_argument("--levels", type=_positive_int("--levels", 1, MAX_LEVELS), nargs="+", default=None)
-    t.add_argument("--frictions", type=_nonneg_float("--frictions", positive=True), nargs="+", default=None)
-    t.add_argument("--cell", choices=["triangle", "quad"], default="triangle")
+    t.add_argument("--levels", type=_positive_int("--levels", 1, MAX_LEVELS), nargs="+", default=None,
+                   help="the levels of the table (default: 3 5 7 9 11 on the adaptive hierarchy, 2-8 on the "
+                        "uniform one)")
+    t.add_argument("--frictions", type=_nonneg_float("--frictions", positive=True), nargs="+", default=None,
+                   help="the friction coefficients (default: the paper's ten, 0.08 0.4 0.7 0.9 1 1.1 2 5 8 40)")
+    t.add_argument("--cell", choices=["triangle", "quad"], default="triangle",
+                   help="triangles (P1) or quadrilaterals (Q1)")
     t.add_argument("--hierarchy", choices=["uniform", "adaptive"], default=None,
                    help="adaptive (default for triangles, levels 3 5 7 9 11) or uniform (levels 2-8)")
     t.add_argument("--jobs", type=_positive_int("--jobs", 1, 64), default=min(2, os.cpu_count() or 1),
                    help="worker processes for the runs (default: 2 or the cores, if fewer)")
-    t.add_argument("--json", type=_writable, metavar="PATH|-")
-    t.add_argument("--plot", type=_with_suffix("--plot", PLOT_SUFFIXES), metavar="PATH")
-    t.add_argument("-q", "--quiet", action="store_true")
+    t.add_argument("--json", type=_writable, metavar="PATH|-",
+                   help="write the report as JSON to PATH (-: standard output)")
+    t.add_argument("--plot", type=_with_suffix("--plot", PLOT_SUFFIXES), metavar="PATH",
+                   help="write Table 1 and Figure 1 as one picture (.png, .pdf or .svg)")
+    t.add_argument("-q", "--quiet", action="store_true", help="print nothing but errors")
     from . import cli_3d
     cli_3d.add_parsers(sub)
     from . import cylinders

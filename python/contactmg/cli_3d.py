@@ -13,42 +13,55 @@ MAX_LEVELS_3D = 7
 def _common(p, levels_default):
     p.add_argument("--levels", type=cli._positive_int("--levels", 1, MAX_LEVELS_3D), default=levels_default,
                    help="levels in all; level 1 is the coarse mesh")
-    p.add_argument("--friction", type=cli._nonneg_float("--friction"), default=0.4)
-    p.add_argument("--method", choices=["nmg", "fixed-point", "linear", "tnnmg"], default="nmg")
-    p.add_argument("--tol", type=cli._nonneg_float("--tol", positive=True), default=1e-11)
-    p.add_argument("--max-cycles", type=cli._positive_int("--max-cycles"), default=200)
-    p.add_argument("--cycle", choices=["V", "W", "F"], default="F")
-    p.add_argument("--nu1", type=cli._positive_int("--nu1", 0, 100), default=3)
-    p.add_argument("--nu2", type=cli._positive_int("--nu2", 0, 100), default=3)
+    p.add_argument("--friction", type=cli._nonneg_float("--friction"), default=0.4,
+                   help="Coulomb friction coefficient F (0: frictionless)")
+    p.add_argument("--method", choices=["nmg", "fixed-point", "linear", "tnnmg"], default="nmg",
+                   help="nmg: Algorithm 2 (nonlinear multigrid); fixed-point: Algorithm 1; linear: the cost "
+                        "reference; tnnmg: truncated nonsmooth Newton multigrid")
+    p.add_argument("--tol", type=cli._nonneg_float("--tol", positive=True), default=1e-11,
+                   help="stop when the correction's energy norm ||u^{k+1} - u^k||_A falls below this")
+    p.add_argument("--max-cycles", type=cli._positive_int("--max-cycles"), default=200,
+                   help="stop as not converged after this many cycles")
+    p.add_argument("--cycle", choices=["V", "W", "F"], default="F", help="multigrid cycle type")
+    p.add_argument("--nu1", type=cli._positive_int("--nu1", 0, 100), default=3, help="pre-smoothing steps per level")
+    p.add_argument("--nu2", type=cli._positive_int("--nu2", 0, 100), default=3, help="post-smoothing steps per level")
     cli.add_thread_options(p)
-    p.add_argument("--json", type=cli._writable, metavar="PATH|-")
-    p.add_argument("--vtu", type=cli._with_suffix("--vtu", (".vtu",)), metavar="PATH")
-    p.add_argument("-q", "--quiet", action="store_true")
+    p.add_argument("--json", type=cli._writable, metavar="PATH|-",
+                   help="write the report as JSON to PATH (-: standard output)")
+    p.add_argument("--vtu", type=cli._with_suffix("--vtu", (".vtu",)), metavar="PATH",
+                   help="write the mesh with displacement, stresses and contact states (ParaView)")
+    p.add_argument("-q", "--quiet", action="store_true", help="print nothing but errors")
 
 
 def add_parsers(sub) -> None:
     from . import cork, sphere
 
     s = sub.add_parser("sphere", help="the Hertz sphere: a half ball pressed onto a rigid plane (3D)")
-    s.add_argument("--cell", choices=["tetra", "hexahedron"], default="hexahedron")
+    s.add_argument("--cell", choices=["tetra", "hexahedron"], default="hexahedron", help="tetrahedra or hexahedra")
     _common(s, sphere.DEFAULT_LEVELS)
-    s.add_argument("--displacement", type=cli._nonneg_float("--displacement", positive=True), default=sphere.DISPLACEMENT)
+    s.add_argument("--displacement", type=cli._nonneg_float("--displacement", positive=True), default=sphere.DISPLACEMENT,
+                   help="displacement D of the flat top towards the plane")
     s.add_argument("--hierarchy", choices=list(sphere.HIERARCHIES), default="uniform",
                    help="adaptive: refined by the hierarchical estimator and bisection (tetra only)")
-    s.add_argument("--plot", type=cli._with_suffix("--plot", PLOT_SUFFIXES), metavar="PATH")
+    s.add_argument("--plot", type=cli._with_suffix("--plot", PLOT_SUFFIXES), metavar="PATH",
+                   help="write the contact stresses against the distance from the axis (.png, .pdf or .svg)")
     cli.add_path_arguments(s)
     c = sub.add_parser("cork", help="the cork pushed into a narrowing bottle neck (3D, Figure 2 right)")
     _common(c, cork.DEFAULT_LEVELS)
-    c.add_argument("--push", type=cli._nonneg_float("--push"), default=cork.PUSH)
-    c.add_argument("--picture", type=cli._with_suffix("--picture", PLOT_SUFFIXES), metavar="PATH")
+    c.add_argument("--push", type=cli._nonneg_float("--push"), default=cork.PUSH,
+                   help="distance D the plunger pushes the cork's top down (mm)")
+    c.add_argument("--picture", type=cli._with_suffix("--picture", PLOT_SUFFIXES), metavar="PATH",
+                   help="write the picture of the deformed cork and a section against the neck (.png, .pdf or .svg)")
     # load path: push in (--steps), then pull the plunger back to where it started
     c.add_argument("--steps", type=cli._positive_int("--steps", 1, 100000), default=None,
                    help="load path: the push in N equal increments (incremental Coulomb law)")
     c.add_argument("--pull-back", action="store_true", help="after the push, move the top back to its start")
     c.add_argument("--pull-back-steps", dest="shear_steps", type=cli._positive_int("--pull-back-steps", 1, 100000),
                    default=None, help="increments of the pull-back (default 1)")
-    c.add_argument("--series", type=cli._with_suffix("--series", (".pvd",)), metavar="PATH")
-    c.add_argument("--zone-plot", type=cli._with_suffix("--zone-plot", PLOT_SUFFIXES), metavar="PATH")
+    c.add_argument("--series", type=cli._with_suffix("--series", (".pvd",)), metavar="PATH",
+                   help="load path: a ParaView time series (.pvd collection of VTU files, one per step)")
+    c.add_argument("--zone-plot", type=cli._with_suffix("--zone-plot", PLOT_SUFFIXES), metavar="PATH",
+                   help="load path: the stick and slip zones against the load step")
 
 
 def _report(args, problem, result, name) -> dict:
@@ -148,11 +161,27 @@ def run_sphere(args) -> int:
     return code
 
 
+def cork_report(args, problem, result) -> dict:
+    """The keys of `contactmg hertz` for the cork, whose zones are bands around its side: the
+    half-widths (largest |x| of a zone node: the cork's radius, whatever the zone) are null, and
+    cork.zone_measures gives what the zones measure (contact_area, stick_area, slip_area,
+    contact_length, stick_length, contact_z_range, stick_z_range)."""
+    from . import cork
+
+    out = cli.hertz_report(args, problem, result)
+    for k in ("hertz_halfwidth", "hertz_peak_pressure"):
+        out.pop(k, None)
+    out["problem"] = "cork"
+    out["contact_halfwidth"] = out["stick_halfwidth"] = None
+    out.update(cork.zone_measures(result))
+    return out
+
+
 def run_cork(args) -> int:
     from . import cork
 
     args.cell = "hexahedron"
-    from . import cli_path, sphere
+    from . import cli_path
     from .generators_3d import CORK_TOP
 
     args.shear = None  # the cork's second phase is the pull-back
@@ -171,30 +200,49 @@ def run_cork(args) -> int:
     else:
         result = problem.solve(args.method, tol=args.tol, max_cycles=args.max_cycles, threads=args.threads,
                                ordering=args.ordering)
-    report = _report(args, problem, result, "cork")
+    report = cork_report(args, problem, result)
     if path is not None:
-        cli_path.report(args, path, report, zone=lambda r, states: sphere.radius_of(r, states), radii=True)
+        # the contract's zone keys stay, null: the zones are bands around the side (zone_measures)
+        cli_path.report(args, path, report, zone=lambda r, states: None)
         for row, r in zip(report["steps"], path.steps):
             row["push_force"] = cork.push_force(problem, r)
+            row.update(cork.zone_measures(r))
     report["push"] = args.push
     report["push_force"] = cork.push_force(problem, result)
     report["material"] = {"E": problem.material.E, "nu": problem.material.nu}
     if args.picture:
-        import matplotlib
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-
-        from .plots_3d import plot_cork
-
-        fig = plt.figure(figsize=(6, 7))
-        ax = fig.add_subplot(projection="3d")
-        plot_cork(problem, result, ax=ax, neck=cork.neck())
-        _save(fig, args.picture)
+        write_cork_picture(problem, result, args, args.picture)
     code = _finish(args, report, result, "cork", path)
     if not args.quiet:
         stream = sys.stderr if args.json == "-" else sys.stdout
         print(f"  push force {report['push_force']:.6g} N for D = {args.push} mm", file=stream)
     return code
+
+
+def cork_figure(problem, result, friction: float, push: float):
+    """The cork's picture (a matplotlib Figure, not attached to pyplot): the deformed cork in 3D
+    coloured by contact state (left) and its side against the neck's tapered wall in a meridian
+    section coloured by contact pressure (right; lengths in mm, stresses in MPa, the cork's units).
+    Returns (figure, 3D axes, section axes)."""
+    from matplotlib.figure import Figure
+
+    from . import cork
+    from .plots_3d import plot_cork, plot_cork_section
+
+    fig = Figure(figsize=(13, 7.5), layout="constrained")
+    ax3 = fig.add_subplot(1, 2, 1, projection="3d")
+    ax2 = fig.add_subplot(1, 2, 2)
+    neck = cork.neck()
+    plot_cork(problem, result, ax=ax3, neck=neck)
+    plot_cork_section(result, neck, ax=ax2, radius=cork.RADIUS)
+    fig.suptitle(f"cork pushed {push:g} mm into the neck, F = {friction:g}", fontsize=12)
+    return fig, ax3, ax2
+
+
+def write_cork_picture(problem, result, args, path) -> None:
+    """`cork --picture PATH`: cork_figure written to PATH."""
+    fig, _, _ = cork_figure(problem, result, args.friction, args.push)
+    fig.savefig(path, dpi=120)
 
 
 COMMANDS = {"sphere": run_sphere, "cork": run_cork}

@@ -75,4 +75,7 @@ def print_steps(out: dict, stream) -> None:
     p = out["path"]
     print(f"  load path: {p['steps_solved']}/{p['steps']} steps, {p['total_cycles']} cycles, {p['seconds']:.2f} s; "
           "cycles per step " + " ".join(str(r["cycles"]) for r in out["steps"]), file=stream)
-    print("  stick half-width per step " + " ".join(f"{r['stick_halfwidth']:.4g}" for r in out["steps"]), file=stream)
+    if all(r.get("stick_halfwidth") is not None for r in out["steps"]):
+        print("  stick half-width per step " + " ".join(f"{r['stick_halfwidth']:.4g}" for r in out["steps"]), file=stream)
+    elif all("stick_area" in r for r in out["steps"]):
+        print("  stick area per step " + " ".join(f"{r['stick_area']:.4g}" for r in out["steps"]), file=stream)

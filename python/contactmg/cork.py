@@ -19,12 +19,15 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from .friction import Coulomb, Frictionless
 from .generators_3d import CORK_SIDE, CORK_TOP, CylinderProjector, cylinder
 from .hierarchy import MeshHierarchy
 from .material import Material
 from .obstacle import RevolutionObstacle
 from .problem import ContactProblem, Dirichlet
+from .results import SLIP, STICK
 
 E, NU = 20.0, 0.0
 RADIUS, LENGTH = 12.0, 40.0
@@ -72,3 +75,21 @@ def push_force(problem: ContactProblem, result) -> float:
     top = problem.mesh.boundary_nodes([CORK_TOP])
     r = problem.A.matvec(result.displacement) - problem.load
     return float(-r[top, 2].sum())
+
+
+def zone_measures(result) -> dict:
+    """What the contact and stick zones of the cork measure (mm, mm^2; a zone's extent counts each
+    of its nodes' lumped share of the side): contact_area, stick_area, slip_area; the heights
+    (reference z) the zone spans, contact_z_range and stick_z_range ([lowest, highest] node, None
+    when the zone is empty), and its axial length, contact_length and stick_length (0 when
+    empty). The cork's zones are bands around its side: a radius or a half-width about an axis
+    would only repeat the cork's radius."""
+    z = result.mesh.points[result.contact_nodes, 2]
+    out = {"contact_area": result.extent((STICK, SLIP)), "stick_area": result.extent((STICK,)),
+           "slip_area": result.extent((SLIP,))}
+    for name, states in (("contact", (STICK, SLIP)), ("stick", (STICK,))):
+        sel = np.isin(result.contact_state, states)
+        lo, hi = (float(z[sel].min()), float(z[sel].max())) if np.any(sel) else (None, None)
+        out[f"{name}_z_range"] = None if lo is None else [lo, hi]
+        out[f"{name}_length"] = 0.0 if lo is None else hi - lo
+    return out

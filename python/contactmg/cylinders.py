@@ -41,7 +41,7 @@ def lower_half_disk(segments: int = 5) -> Mesh:
     return Mesh.from_cells(pts, m.cells[:, ::-1].copy(), "triangle", tagger)
 
 
-def cylinders_problem(levels: int = 5, friction: float = 0.0, E2: float = E, nu2: float = NU, coulomb_at_zero=False,
+def cylinders_problem(levels: int = 5, friction: float = 0.4, E2: float = E, nu2: float = NU, coulomb_at_zero=False,
                       cycle: str = "F", smooth: int = 3, upper_segments: int = 4, lower_segments: int = 5,
                       tied_correction: bool = True) -> TwoBodyProblem:
     if isinstance(friction, bool) or not isinstance(friction, (int, float)) or not math.isfinite(friction) or friction < 0:
@@ -85,18 +85,24 @@ def add_parser(sub):
     c = sub.add_parser("cylinders", help="two elastic half-disks in contact (dual mortar, non-matching meshes)")
     c.add_argument("--levels", type=positive_int("--levels", 1, max_levels), default=5,
                    help="levels in all; level 1 is the coarse mesh")
-    c.add_argument("--friction", type=nonneg_float("--friction"), default=0.0)
+    c.add_argument("--friction", type=nonneg_float("--friction"), default=0.4,
+                   help="Coulomb friction coefficient F (0: frictionless)")
     c.add_argument("--method", choices=["nmg", "fixed-point", "linear", "tnnmg"], default="nmg",
                    help="nmg: Algorithm 2 with the tied coarse correction of two bodies; tnnmg: truncated nonsmooth Newton multigrid")
     c.add_argument("--E2", type=nonneg_float("--E2", positive=True), default=E, help="Young's modulus of the lower body")
     c.add_argument("--nu2", type=float, default=NU, help="Poisson's ratio of the lower body")
-    c.add_argument("--tol", type=nonneg_float("--tol", positive=True), default=1e-11)
-    c.add_argument("--max-cycles", type=positive_int("--max-cycles", 1, max_cycles), default=200)
-    c.add_argument("--cycle", choices=["V", "W", "F"], default="F")
-    c.add_argument("--json", type=writable, metavar="PATH|-")
-    c.add_argument("--vtu", type=with_suffix("--vtu", (".vtu",)), metavar="PATH")
-    c.add_argument("--plot", type=with_suffix("--plot", plot_suffixes), metavar="PATH")
-    c.add_argument("-q", "--quiet", action="store_true")
+    c.add_argument("--tol", type=nonneg_float("--tol", positive=True), default=1e-11,
+                   help="stop when the correction's energy norm ||u^{k+1} - u^k||_A falls below this")
+    c.add_argument("--max-cycles", type=positive_int("--max-cycles", 1, max_cycles), default=200,
+                   help="stop as not converged after this many cycles")
+    c.add_argument("--cycle", choices=["V", "W", "F"], default="F", help="multigrid cycle type")
+    c.add_argument("--json", type=writable, metavar="PATH|-",
+                   help="write the report as JSON to PATH (-: standard output)")
+    c.add_argument("--vtu", type=with_suffix("--vtu", (".vtu",)), metavar="PATH",
+                   help="write the mesh with displacement, stresses and contact states (ParaView)")
+    c.add_argument("--plot", type=with_suffix("--plot", plot_suffixes), metavar="PATH",
+                   help="write the boundary stresses with the stick and slip zones (.png, .pdf or .svg)")
+    c.add_argument("-q", "--quiet", action="store_true", help="print nothing but errors")
 
 
 def run_cylinders(args) -> int:

@@ -2,7 +2,8 @@
 returns the axes it drew on.
 
 - plot_boundary_stress: Figure 2 (middle), boundary stresses with stick and slip zones;
-- plot_convergence: Figure 1 (left), total V-cycles against the number of nodes;
+- plot_convergence: Figure 1 (left), total cycles against the number of nodes, Algorithm 1 and
+  Algorithm 2 in two panels (plot_cycles draws one);
 - plot_fixed_point_iterations: Figure 1 (right), Algorithm 1's outer iterations per level and F;
 - plot_table1: Table 1 as a table image;
 - plot_correction_history: ||u^{k+1} - u^k||_A against the cycle for several solves.
@@ -17,9 +18,7 @@ from .checks import VIOLATION_TOL
 from .results import SLIP, STICK
 
 STICK_COLOR, SLIP_COLOR = "tab:green", "tab:orange"
-ALG1_COLOR, ALG2_COLOR = "tab:blue", "tab:red"
 _MARKERS = "os^vD<>ph*"
-_LINESTYLES = ["-", "--", "-.", ":"]
 
 
 def _axes(ax, **kw):
@@ -190,14 +189,15 @@ def plot_table1(table: Dict, ax=None, vcycles: bool = False):
     t = ax.table(cellText=cells, rowLabels=[f"{F:g}" for F in table["frictions"]],
                  colLabels=[f"{d:,}" for d in table["dofs"]], loc="center", cellLoc="center")
     t.auto_set_font_size(False)
-    t.set_fontsize(8)
-    t.scale(1, 1.3)
+    t.set_fontsize(10)
+    t.scale(1, 1.5)
+    t.auto_set_column_width([-1])
     for (r, c), cell in t.get_celld().items():
         if r > 0 and c >= 0 and ("no conv." in cell.get_text().get_text() or "!" in cell.get_text().get_text()):
             cell.get_text().set_color("tab:red")
     ax.axis("off")
-    ax.set_title("Table 1: fixed-point iterations (rows F, columns dofs)" +
-                 (" (V-cycles Alg. 1 / Alg. 2)" if vcycles else ""), fontsize=9)
+    ax.set_title("Table 1: Algorithm 1's outer iterations\n(rows: friction coefficient F, columns: degrees of freedom)" +
+                 (" (cycles Alg. 1 / Alg. 2)" if vcycles else ""), fontsize=11)
     return ax
 
 
@@ -215,51 +215,159 @@ def convergence_records(table: Dict) -> List[Dict]:
     return out
 
 
-def plot_convergence(records, ax=None, frictions: Optional[Iterable[float]] = None):
-    """Figure 1 left: total multigrid cycles (the paper's V-cycles) against the number of nodes (log x axis), Algorithm 1 (fixed
-    point) blue, Algorithm 2 (nmg) red, one curve per friction coefficient (its own marker and line
-    style, labelled "Alg. 1, F=..." / "Alg. 2, F=...").
+# Figure 1's friction coefficients: one colour each from a sequential map, cut before its pale
+# yellow end (which vanishes on white), and one marker each, so that a line is told apart by either.
+FRICTION_CMAP = "plasma"
+_CMAP_RANGE = (0.0, 0.88)
+NOT_CONVERGED_MARKER = "X"
+NOT_CONVERGED_LABEL = "not converged"
+_FAIL_BAND_SCALE = 1.3  # the y axis reaches 1.3 x the largest count: the top band holds the failures
+_ALGORITHM = {"fixed-point": "Algorithm 1 (fixed point)", "nmg": "Algorithm 2 (nonlinear multigrid)"}
 
-    `records`: a table1() dict, or a list of per-solve records with the keys friction, nodes,
-    method ("fixed-point" or "nmg"), cycles and optionally converged (e.g. the JSON reports of
-    `contactmg hertz`). Runs that did not converge are ringed in black (label "no conv.")."""
-    ax = _axes(ax, figsize=(6, 4.5))
+
+def friction_styles(frictions: Iterable[float]) -> Dict[float, Dict]:
+    """{F: {"color", "marker"}} for the friction coefficients in increasing order: colours evenly
+    spaced along FRICTION_CMAP (by rank, so that 0.08 and 0.4 differ as much as 8 and 40), one
+    marker each."""
+    import matplotlib
+
+    Fs = sorted({float(F) for F in frictions})
+    cmap = matplotlib.colormaps[FRICTION_CMAP]
+    lo, hi = _CMAP_RANGE
+    pos = np.linspace(lo, hi, len(Fs)) if len(Fs) > 1 else [lo]
+    return {F: {"color": cmap(float(t)), "marker": _MARKERS[k % len(_MARKERS)]} for k, (F, t) in enumerate(zip(Fs, pos))}
+
+
+def _as_records(records):
     cycle_type = records.get("cycle_type", "F(3,3)") if isinstance(records, dict) else None
     if isinstance(records, dict):
         records = convergence_records(records)
-    records = list(records)
+    return list(records), cycle_type
+
+
+def plot_cycles(records, method: str, ax=None, frictions: Optional[Iterable[float]] = None, legend: bool = True,
+                styles: Optional[Dict[float, Dict]] = None):
+    """One algorithm's panel of Figure 1 (left): its total multigrid cycles against the number of
+    nodes (log x), one line per friction coefficient (colour and marker from friction_styles,
+    label "F = 0.4"). A run that did not converge is not drawn as a count: its line breaks there
+    (NaN), and an X in the coefficient's colour marks it at the top edge of the panel, in a band
+    above the largest count (the k-th failure at the same number of nodes a little lower, so that
+    none hides another) and "F = ..." written beside it, with one legend entry "not converged".
+
+    `records`: a table1() dict, or per-solve records with the keys friction, nodes, method
+    ("fixed-point" or "nmg"), cycles and optionally converged (e.g. the JSON reports of
+    `contactmg hertz`). `method`: "fixed-point" (Algorithm 1) or "nmg" (Algorithm 2)."""
+    if method not in _ALGORITHM:
+        raise ValueError(f"method must be 'fixed-point' or 'nmg', got {method!r}")
+    ax = _axes(ax, figsize=(6, 4.5))
+    records, cycle_type = _as_records(records)
     allF = sorted({float(r["friction"]) for r in records})
-    keep = allF if frictions is None else [float(F) for F in frictions]
-    failed = []
-    for k, F in enumerate(allF):
-        if F not in keep:
+    keep = allF if frictions is None else sorted(float(F) for F in frictions)
+    styles = styles or friction_styles(allF)
+    failed = {}  # nodes -> [(F, colour), ...] of the runs that did not converge there
+    for F in keep:
+        rs = sorted((r for r in records if float(r["friction"]) == F and r["method"] == method), key=lambda r: r["nodes"])
+        if not rs:
             continue
-        for method, color, name in (("fixed-point", ALG1_COLOR, "Alg. 1"), ("nmg", ALG2_COLOR, "Alg. 2")):
-            rs = sorted((r for r in records if float(r["friction"]) == F and r["method"] == method), key=lambda r: r["nodes"])
-            if not rs:
-                continue
-            x = [r["nodes"] for r in rs]
-            y = [r["cycles"] for r in rs]
-            ax.plot(x, y, color=color, marker=_MARKERS[k % len(_MARKERS)], ls=_LINESTYLES[k % len(_LINESTYLES)],
-                    ms=4, lw=1, label=f"{name}, F={F:g}")
-            failed += [(r["nodes"], r["cycles"]) for r in rs if not r.get("converged", True)]
+        st = styles[F]
+        x = np.array([r["nodes"] for r in rs], dtype=float)
+        ok = np.array([bool(r.get("converged", True)) for r in rs])
+        y = np.where(ok, [float(r["cycles"]) for r in rs], np.nan)
+        ax.plot(x, y, color=st["color"], marker=st["marker"], ms=6, lw=1.6, label=f"F = {F:g}")
+        for n in x[~ok]:
+            failed.setdefault(float(n), []).append((F, st["color"]))
+    counts = [float(r["cycles"]) for r in records if r["method"] == method and r.get("converged", True)
+              and float(r["friction"]) in keep]
+    ymax = max(counts, default=1.0)
+    # a band above the largest count holds the failures' marks: no mark sits on a count
+    ax.set_ylim(0, _FAIL_BAND_SCALE * ymax)
+    from matplotlib.ticker import MaxNLocator
+
+    ax.yaxis.set_major_locator(MaxNLocator(integer=True))  # cycles are counted
     if failed:
-        fx, fy = zip(*failed)
-        ax.scatter(fx, fy, s=70, facecolors="none", edgecolors="k", lw=1.2, zorder=5, label="no conv.")
+        from matplotlib.transforms import blended_transform_factory
+
+        # x in data coordinates, y in axes coordinates: at the top edge whatever the counts
+        trans = blended_transform_factory(ax.transData, ax.transAxes)
+        xs, ys, cs = [], [], []
+        for n, runs in sorted(failed.items()):
+            for k, (F, c) in enumerate(runs):
+                xs.append(n)
+                ys.append(0.95 - 0.05 * k)
+                cs.append(c)
+                # the coefficient beside its mark: the colours of neighbouring F are close
+                ax.annotate(f"F = {F:g}", (n, ys[-1]), xycoords=trans, xytext=(-9, 0), textcoords="offset points",
+                            ha="right", va="center", fontsize=8, color="0.2")
+        ax.scatter(xs, ys, transform=trans, marker=NOT_CONVERGED_MARKER, s=110, c=cs, edgecolors="k", linewidths=0.6,
+                   zorder=5, clip_on=False, label=NOT_CONVERGED_LABEL)
     ax.set_xscale("log")
     ax.set_xlabel("number of nodes")
-    ax.set_ylabel("number of multigrid cycles" + (f" ({cycle_type})" if cycle_type else ""))
-    ax.set_title("Figure 1 (left): Algorithm 1 blue, Algorithm 2 red", fontsize=9)
-    ax.legend(fontsize=6, ncol=2)
+    ax.set_ylabel("multigrid cycles, all together" + (f" ({cycle_type})" if cycle_type else ""))
+    ax.set_title(_ALGORITHM[method])
+    ax.grid(True, which="major", alpha=0.3)
+    if legend:
+        ax.legend(fontsize=9, title="friction", title_fontsize=9, loc="best")
     return ax
+
+
+def plot_convergence(records, axes=None, frictions: Optional[Iterable[float]] = None):
+    """Figure 1 (left), the two algorithms apart: the total multigrid cycles of Algorithm 1 (fixed
+    point, first panel) and Algorithm 2 (nmg, second panel) against the number of nodes, each
+    panel with its own y scale, one line per friction coefficient in the same colour and marker in
+    both (see plot_cycles: runs that did not converge break the line and are marked with an X at
+    the top edge). One legend, right of the second panel. `axes`: two axes (a new figure when
+    None). Returns the two axes."""
+    if axes is None:
+        import matplotlib.pyplot as plt
+
+        _, axes = plt.subplots(1, 2, figsize=(12, 4.5))
+    ax1, ax2 = axes
+    recs, cycle_type = _as_records(records)
+    styles = friction_styles(float(r["friction"]) for r in recs)
+    rec_in = records if isinstance(records, dict) else recs
+    plot_cycles(rec_in, "fixed-point", ax=ax1, frictions=frictions, legend=False, styles=styles)
+    plot_cycles(rec_in, "nmg", ax=ax2, frictions=frictions, legend=False, styles=styles)
+    handles, labels = {}, []
+    for ax in (ax1, ax2):
+        for h, lab in zip(*ax.get_legend_handles_labels()):
+            if lab not in handles:
+                handles[lab] = h
+                labels.append(lab)
+    # the failures' entry in black: its points carry the colour of their coefficient
+    if NOT_CONVERGED_LABEL in handles:
+        from matplotlib.lines import Line2D
+
+        handles[NOT_CONVERGED_LABEL] = Line2D([], [], ls="none", marker=NOT_CONVERGED_MARKER, ms=9, mfc="0.6",
+                                              mec="k", label=NOT_CONVERGED_LABEL)
+    ax2.legend([handles[lab] for lab in labels], labels, fontsize=9, title="friction", title_fontsize=9,
+               loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)
+    return ax1, ax2
+
+
+# Axes3D gives its collections zorders above every 2D artist's as it sorts them by depth: the
+# numbers on the bars need a larger one to stay readable
+_ON_TOP = 1e6
+_FAILED_TILE = (1.0, 0.85, 0.85, 0.9)
+NOT_CONVERGED_MARK = "\u00d7"
+
+
+def _floor_tile(ax, x, y, w, d, **kw):
+    """A w x d square on the floor (z = 0) of a 3D axes at (x, y): where a bar would stand."""
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
+    tile = Poly3DCollection([[(x, y, 0.0), (x + w, y, 0.0), (x + w, y + d, 0.0), (x, y + d, 0.0)]], **kw)
+    ax.add_collection3d(tile)
+    return tile
 
 
 def plot_fixed_point_iterations(table: Dict, ax=None, kind: str = "bar3d", annotate: bool = True):
     """Figure 1 right: Algorithm 1's outer iterations against level and friction coefficient.
     kind="bar3d" (like the paper; needs a 3D axes, created when ax is None) draws one bar per
-    (level, F), a red bar up to the top of the plot where it did not converge; kind="heatmap" draws
-    the iterations as an image (not converged: masked, hatched). With annotate the numbers (or
-    "no conv.") are written on the bars/cells."""
+    (level, F) as high as the iterations, in the coefficient's colour (friction_styles); where
+    Algorithm 1 did not converge there is no count to draw: a hatched red tile on the floor
+    (gid "not converged") with a red cross (NOT_CONVERGED_MARK) instead of a bar, and a legend
+    entry. kind="heatmap" draws the iterations as an image (not converged: masked, hatched, "no
+    conv."). With annotate the numbers are written on the bars/cells."""
     levels = list(table["levels"])
     F = list(table["frictions"])
     its = table["fixed_point_iterations"]
@@ -270,19 +378,42 @@ def plot_fixed_point_iterations(table: Dict, ax=None, kind: str = "bar3d", annot
             import matplotlib.pyplot as plt
 
             ax = plt.figure(figsize=(6, 5)).add_subplot(projection="3d")
+        styles = friction_styles(F)
+        w = 0.6
+        failed = False
         for i in range(len(F)):
             for j in range(len(levels)):
                 v = data[i, j]
-                h = top * 1.1 if np.isnan(v) else v
-                ax.bar3d(j, i, 0, 0.6, 0.6, h, color="tab:red" if np.isnan(v) else "tab:blue", alpha=0.8, shade=True)
-                if annotate:
-                    ax.text(j + 0.3, i + 0.3, h * 1.02, "no conv." if np.isnan(v) else f"{int(v)}", fontsize=6,
-                            ha="center", color="tab:red" if np.isnan(v) else "k")
-        ax.set_xticks(np.arange(len(levels)) + 0.3)
+                if np.isnan(v):
+                    _floor_tile(ax, j, i, w, w, facecolors=_FAILED_TILE, edgecolors="tab:red", hatch="xxx",
+                                linewidths=1.0, gid=NOT_CONVERGED_LABEL)
+                    failed = True
+                else:
+                    ax.bar3d(j, i, 0, w, w, v, color=styles[float(F[i])]["color"], alpha=0.85, shade=True)
+                # a cross on each failure's tile (words would overlap on neighbouring tiles)
+                if np.isnan(v):
+                    ax.text(j + w / 2, i + w / 2, 0.0, NOT_CONVERGED_MARK, fontsize=13, ha="center", va="center",
+                            color="tab:red", fontweight="bold", zorder=_ON_TOP)
+                elif annotate:
+                    ax.text(j + w / 2, i + w / 2, v + 0.02 * top, f"{int(v)}", fontsize=7, ha="center", color="k",
+                            zorder=_ON_TOP)
+        ax.set_xticks(np.arange(len(levels)) + w / 2)
         ax.set_xticklabels([str(L) for L in levels])
-        ax.set_yticks(np.arange(len(F)) + 0.3)
-        ax.set_yticklabels([f"{f:g}" for f in F], fontsize=7)
-        ax.set_zlabel("iterations")
+        ax.set_yticks(np.arange(len(F)) + w / 2)
+        ax.set_yticklabels([f"{f:g}" for f in F], fontsize=8)
+        ax.set_zlim(0, top * 1.05)
+        # seen from the corner of the finest level and the largest F, where Algorithm 1 fails:
+        # the failures' tiles stand in front, not behind the tallest bars
+        ax.view_init(elev=28, azim=35)
+        ax.set_zlabel("outer iterations")
+        ax.set_ylabel("friction coefficient F")
+        title = "Algorithm 1: outer iterations"
+        if failed:
+            from matplotlib.patches import Patch
+
+            ax.legend(handles=[Patch(facecolor=_FAILED_TILE, edgecolor="tab:red", hatch="xxx",
+                                     label=f"{NOT_CONVERGED_MARK} {NOT_CONVERGED_LABEL} (no bar)")],
+                      loc="upper left", fontsize=9)
     elif kind == "heatmap":
         ax = _axes(ax, figsize=(1.5 + 0.8 * len(levels), 1 + 0.4 * len(F)))
         import matplotlib.pyplot as plt
@@ -301,9 +432,10 @@ def plot_fixed_point_iterations(table: Dict, ax=None, kind: str = "bar3d", annot
         ax.set_xticklabels([str(L) for L in levels])
         ax.set_yticks(np.arange(len(F)))
         ax.set_yticklabels([f"{f:g}" for f in F], fontsize=7)
+        ax.set_ylabel("F")
+        title = "Algorithm 1: outer iterations (red: no conv.)"
     else:
         raise ValueError(f"kind must be 'bar3d' or 'heatmap', got {kind!r}")
     ax.set_xlabel("level")
-    ax.set_ylabel("F")
-    ax.set_title("Figure 1 (right): fixed-point iterations (red: no conv.)", fontsize=9)
+    ax.set_title(title)
     return ax

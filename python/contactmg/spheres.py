@@ -57,7 +57,7 @@ def lower_half_ball(cell: str = "hexahedron", k: int = LOWER_K, inner: float = L
     return Mesh.from_cells(pts, np.ascontiguousarray(cells), cell, tagger)
 
 
-def spheres_problem(cell: str = "hexahedron", levels: int = DEFAULT_LEVELS, friction: float = 0.0, E2: float = E,
+def spheres_problem(cell: str = "hexahedron", levels: int = DEFAULT_LEVELS, friction: float = 0.4, E2: float = E,
                     nu2: float = NU, displacement: float = DISPLACEMENT, coulomb_at_zero: bool = False,
                     cycle: str = "F", nu1: int = 3, nu2_sweeps: int = 3, upper_k: int = UPPER_K,
                     lower_k: int = LOWER_K, lower_inner: float = LOWER_INNER) -> TwoBodyProblem:
@@ -127,22 +127,29 @@ def add_parser(sub):
     from . import cli
 
     c = sub.add_parser("spheres", help="two elastic hemispheres in contact (3D dual mortar, non-matching meshes)")
-    c.add_argument("--cell", choices=["tetra", "hexahedron"], default="hexahedron")
+    c.add_argument("--cell", choices=["tetra", "hexahedron"], default="hexahedron", help="tetrahedra or hexahedra")
     c.add_argument("--levels", type=cli._positive_int("--levels", 1, 7), default=DEFAULT_LEVELS,
                    help="levels in all; level 1 is the coarse mesh")
-    c.add_argument("--friction", type=cli._nonneg_float("--friction"), default=0.0)
-    c.add_argument("--method", choices=["nmg", "fixed-point", "linear", "tnnmg"], default="nmg")
+    c.add_argument("--friction", type=cli._nonneg_float("--friction"), default=0.4,
+                   help="Coulomb friction coefficient F (0: frictionless)")
+    c.add_argument("--method", choices=["nmg", "fixed-point", "linear", "tnnmg"], default="nmg",
+                   help="nmg: Algorithm 2 (nonlinear multigrid); fixed-point: Algorithm 1; linear: the cost "
+                        "reference; tnnmg: truncated nonsmooth Newton multigrid")
     c.add_argument("--E2", type=cli._nonneg_float("--E2", positive=True), default=E, help="Young's modulus of the lower body")
     c.add_argument("--nu2", type=float, default=NU, help="Poisson's ratio of the lower body")
     c.add_argument("--displacement", type=cli._nonneg_float("--displacement", positive=True), default=DISPLACEMENT,
                    help="displacement of each flat face towards the other")
-    c.add_argument("--tol", type=cli._nonneg_float("--tol", positive=True), default=1e-11)
-    c.add_argument("--max-cycles", type=cli._positive_int("--max-cycles", 1, cli.MAX_CYCLES), default=200)
-    c.add_argument("--cycle", choices=["V", "W", "F"], default="F")
+    c.add_argument("--tol", type=cli._nonneg_float("--tol", positive=True), default=1e-11,
+                   help="stop when the correction's energy norm ||u^{k+1} - u^k||_A falls below this")
+    c.add_argument("--max-cycles", type=cli._positive_int("--max-cycles", 1, cli.MAX_CYCLES), default=200,
+                   help="stop as not converged after this many cycles")
+    c.add_argument("--cycle", choices=["V", "W", "F"], default="F", help="multigrid cycle type")
     cli.add_thread_options(c)
-    c.add_argument("--json", type=cli._writable, metavar="PATH|-")
-    c.add_argument("--vtu", type=cli._with_suffix("--vtu", (".vtu",)), metavar="PATH")
-    c.add_argument("-q", "--quiet", action="store_true")
+    c.add_argument("--json", type=cli._writable, metavar="PATH|-",
+                   help="write the report as JSON to PATH (-: standard output)")
+    c.add_argument("--vtu", type=cli._with_suffix("--vtu", (".vtu",)), metavar="PATH",
+                   help="write the mesh with displacement, stresses and contact states (ParaView)")
+    c.add_argument("-q", "--quiet", action="store_true", help="print nothing but errors")
 
 
 def run_spheres(args) -> int:

@@ -165,22 +165,34 @@ def merge_levels(a: Dict, b: Dict) -> Dict:
     return out
 
 
-def save_figures(table: Dict, path: str, dpi: int = 130) -> None:
-    """One image at `path` with three panels: Table 1 (left), Figure 1 left (V-cycles against nodes,
-    middle) and Figure 1 right (fixed-point iterations as 3D bars, right). Uses matplotlib's Figure
-    directly, so it neither needs nor changes a pyplot backend."""
+def table1_figure(table: Dict):
+    """The matplotlib Figure (not attached to pyplot) of Table 1 and Figure 1: Figure 1 left split
+    into Algorithm 1's and Algorithm 2's cycles (top row, each with its own y scale, one legend
+    right of them), Table 1 (bottom left) and Algorithm 1's outer iterations as 3D bars (Figure 1
+    right, bottom right). Returns (figure, {"table", "alg1", "alg2", "bars"} -> axes)."""
     from matplotlib.figure import Figure
 
     from .plots import plot_convergence, plot_fixed_point_iterations, plot_table1
 
-    fig = Figure(figsize=(18, 6))
-    ax0 = fig.add_subplot(1, 3, 1)
-    ax1 = fig.add_subplot(1, 3, 2)
-    ax2 = fig.add_subplot(1, 3, 3, projection="3d")
-    plot_table1(table, ax=ax0)
-    plot_convergence(table, ax=ax1)
-    plot_fixed_point_iterations(table, ax=ax2)
-    fig.tight_layout()
+    fig = Figure(figsize=(15, 11), layout="constrained")
+    top, bottom = fig.subfigures(2, 1, height_ratios=(1.0, 1.15))
+    alg1, alg2 = top.subplots(1, 2)
+    tab = bottom.add_subplot(1, 2, 1)
+    bars = bottom.add_subplot(1, 2, 2, projection="3d")
+    plot_convergence(table, axes=(alg1, alg2))
+    plot_table1(table, ax=tab)
+    plot_fixed_point_iterations(table, ax=bars, annotate=False)  # the numbers are in the table beside
+    hier = table.get("hierarchy")
+    fig.suptitle(f"Hertz benchmark, {table.get('cell', 'triangle')}s" + (f", {hier} hierarchy" if hier else "")
+                 + ": Algorithm 1 (fixed point) and Algorithm 2 (nonlinear multigrid)", fontsize=13)
+    return fig, {"table": tab, "alg1": alg1, "alg2": alg2, "bars": bars}
+
+
+def save_figures(table: Dict, path: str, dpi: int = 110) -> None:
+    """One image at `path` (table1_figure): Figure 1 left as two panels, Algorithm 1 and Algorithm
+    2 apart (top), Table 1 and Figure 1 right (bottom). Uses matplotlib's Figure directly, so it
+    neither needs nor changes a pyplot backend."""
+    fig, _ = table1_figure(table)
     fig.savefig(path, dpi=dpi)
 
 
@@ -201,8 +213,8 @@ def run_table1(args) -> int:
     """`contactmg table1`: runs table1() over args.levels (default DEFAULT_ADAPTIVE_LEVELS on the
     adaptive hierarchy -- the default for triangles --, DEFAULT_LEVELS on the uniform one) and
     args.frictions (default the paper's ten coefficients) for args.cell, in args.jobs processes; writes the JSON to
-    args.json ("-": standard output) and, with args.plot, one PNG at that path with three panels
-    (Table 1, Figure 1 left, Figure 1 right). Prints the table as text unless args.quiet (to standard
+    args.json ("-": standard output) and, with args.plot, one image at that path (save_figures:
+    Figure 1 left as two panels, Table 1, Figure 1 right). Prints the table as text unless args.quiet (to standard
     error when the JSON goes to standard output). Exit status 0, or 3 when some nmg run did not
     converge or stopped on an iterate that is not a solution (relative violation of the contact
     conditions > VIOLATION_TOL); the JSON and the figure are written in either case."""
