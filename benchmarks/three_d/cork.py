@@ -1,13 +1,15 @@
-"""Issue-10 table for the cork in the bottle neck: level, dofs, cycles, push force, contact/stick/slip
-nodes for F = 0 and 0.4, the linear cycles with the contact state known (F = 0.4), the TNNMG cycles
-(F = 0 and 0.4), nmg/linear time ratio (F = 0.4), seconds, peak RSS; one level per fresh process.
+"""The cork pushed into a bottle neck (3D, a revolution obstacle with rotated contact frames) over
+levels: dofs, Algorithm 2 and TNNMG cycles, push force, contact / stick / slip nodes for F = 0 and
+0.4, the cycles of the linear solve with the final contact state known and the nmg/linear time
+ratio (F = 0.4), solve seconds and peak memory; one level per fresh process.
 
-    python benchmarks/cork_levels.py --levels 2 4 [--layers 8] [--json out/cork_levels.json]
+    python benchmarks/three_d/cork.py [--levels 2 4] [--layers 8] [--quick] [--json PATH]
 """
-import argparse
-import json
-import subprocess
 import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from _common import parser, run_child, write_result  # noqa: E402
 
 CHILD = r"""
 import json, resource, sys, time
@@ -16,7 +18,7 @@ L, layers = int(sys.argv[1]), int(sys.argv[2])
 out = {"level": L}
 for F in (0.0, 0.4):
     t0 = time.perf_counter()
-    p = cork.cork_problem(L, F, axial_layers=layers)
+    p = cork.cork_problem(L, F, axial_layers=layers or None)
     p.solver
     out["setup_seconds"] = time.perf_counter() - t0
     res = p.solve(tol=1e-11)
@@ -35,20 +37,20 @@ print(json.dumps(out))
 
 
 def main():
-    ap = argparse.ArgumentParser()
+    ap = parser(__doc__)
     ap.add_argument("--levels", type=int, nargs=2, default=[2, 4])
-    ap.add_argument("--layers", type=int, default=None, help="axial layers of the coarse mesh (default: the shipped one)")
-    ap.add_argument("--json")
+    ap.add_argument("--layers", type=int, default=0, help="axial layers of the coarse mesh (0: the shipped one)")
     a = ap.parse_args()
+    if a.quick:
+        a.levels = [1, 2]
     rows = []
     print(f"{'lvl':>3} {'dofs':>8} {'cyc F=0':>7} {'cyc .4':>6} {'push F=0':>9} {'push .4':>8} {'stick':>6} {'slip':>5} "
           f"{'lin cyc':>7} {'tnnmg F=0/.4':>12} {'nmg/lin':>7} {'solve s':>8} {'peak MB':>8}")
     for L in range(a.levels[0], a.levels[1] + 1):
-        r = subprocess.run([sys.executable, "-c", CHILD, str(L), str(a.layers or 0)], capture_output=True, text=True)
-        if r.returncode != 0:
-            print(f"{L:3d} failed: {r.stderr.strip().splitlines()[-1] if r.stderr else r.returncode}")
+        r = run_child(CHILD, L, a.layers)
+        if "error" in r:
+            print(f"{L:3d} failed: {r['error']}")
             break
-        r = json.loads(r.stdout.strip().splitlines()[-1])
         rows.append(r)
         f0, f4 = r["F0.0"], r["F0.4"]
         c = lambda f: f["cycles"] if f["converged"] else "-"  # noqa: E731
@@ -56,9 +58,7 @@ def main():
               f"{f4['stick_nodes']:6d} {f4['slip_nodes']:5d} {r['linear_cycles']:7d} "
               f"{str(f0['tnnmg_cycles']) + '/' + str(f4['tnnmg_cycles']):>12} {r['nmg_over_linear']:7.2f} "
               f"{f0['solve_seconds'] + f4['solve_seconds']:8.2f} {r['peak_rss_mb']:8.0f}", flush=True)
-    if a.json:
-        with open(a.json, "w") as fh:
-            json.dump(rows, fh, indent=1)
+    write_result(__file__, a, {"layers": a.layers or None, "rows": rows})
 
 
 if __name__ == "__main__":
