@@ -1,27 +1,29 @@
-"""Issue 12: load paths on the Hertz benchmark with the incremental Coulomb law.
+"""Load paths on the Hertz benchmark with the incremental Coulomb law: one cold solve (the
+problem's single step from u = 0) against a path of --normal-steps equal increments of the normal
+loading followed by --shear-steps increments of a tangential move of the top by --shear
+(Cattaneo-Mindlin), every step warm-started from the previous one; with --cold the same path
+again with every step started from u = 0 (the cycles the warm start saves). Per step: load
+parameter, cycles (warm, cold), stick and contact half-widths, slip nodes, seconds; and the path's
+time against the cold single solve (a 20-step path should cost less than 20 cold solves).
 
-One cold solve (the problem's single step from u = 0) against a path of --normal-steps equal
-increments of the normal loading followed by --shear-steps increments of a tangential move of the
-top by --shear (Cattaneo-Mindlin); every step warm-started from the previous one. With --cold
-the same path again with every step started from u = 0 (same incremental problems): the cycles the
-warm start saves. Prints per step: load parameter, cycles (warm, cold), stick and contact
-half-widths, slip nodes; and the path time against the cold single solve (target: a 20-step path
-under 20 cold solves). The machine may be loaded: the times are wall times of this process.
-
-    python benchmarks/load_path.py --level 8 --normal-steps 10 --shear-steps 10 --shear 0.002 [--cold] [--json out.json]
+    python benchmarks/methods/load_path.py [--level 8] [--normal-steps 10] [--shear-steps 10]
+        [--shear 0.002] [--cold] [--quick] [--json PATH]
 """
-import argparse
-import json
 import os
+import sys
 import time
+from pathlib import Path
 
-from contactmg.generators import HERTZ_TOP
-from contactmg.hertz import TOP_DISPLACEMENT, hertz_problem
-from contactmg.loadpath import two_phase_path
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from _common import parser, write_result  # noqa: E402
+
+from contactmg.generators import HERTZ_TOP  # noqa: E402
+from contactmg.hertz import TOP_DISPLACEMENT, hertz_problem  # noqa: E402
+from contactmg.loadpath import two_phase_path  # noqa: E402
 
 
 def main():
-    ap = argparse.ArgumentParser()
+    ap = parser(__doc__)
     ap.add_argument("--level", type=int, default=8)
     ap.add_argument("--friction", type=float, default=0.4)
     ap.add_argument("--normal-steps", type=int, default=10)
@@ -29,8 +31,9 @@ def main():
     ap.add_argument("--shear", type=float, default=0.002)
     ap.add_argument("--tol", type=float, default=1e-11)
     ap.add_argument("--cold", action="store_true", help="also solve every step from u = 0")
-    ap.add_argument("--json")
     a = ap.parse_args()
+    if a.quick:
+        a.level, a.normal_steps, a.shear_steps, a.cold = 3, 3, 3, True
     t0 = time.perf_counter()
     p = hertz_problem("triangle", a.level, a.friction)
     p.solver
@@ -53,13 +56,12 @@ def main():
     print(f"path of {len(rows)} steps: {sum(warm.cycles)} cycles, {warm.seconds:.2f} s = {ratio:.2f} cold single solves "
           f"(target < {len(rows)}); builds {sum(r['build_seconds'] for r in rows):.2f} s"
           + (f"; cold steps {sum(cold.cycles)} cycles, {cold.seconds:.2f} s" if cold else ""))
-    if a.json:
-        with open(a.json, "w") as fh:
-            json.dump({"level": a.level, "dofs": 2 * p.mesh.num_points, "friction": a.friction, "setup_seconds": setup,
-                       "single_cycles": single.cycles, "single_seconds": single.solve_seconds,
-                       "path_seconds": warm.seconds, "path_over_single": ratio, "steps": rows,
-                       "cold_path_seconds": cold.seconds if cold else None, "load_average": os.getloadavg()[0]},
-                      fh, indent=1)
+    write_result(__file__, a, {"level": a.level, "dofs": 2 * p.mesh.num_points, "friction": a.friction,
+                               "setup_seconds": setup, "single_cycles": single.cycles,
+                               "single_seconds": single.solve_seconds, "path_seconds": warm.seconds,
+                               "path_over_single": ratio, "steps": rows,
+                               "cold_path_seconds": cold.seconds if cold else None,
+                               "load_average": os.getloadavg()[0]})
 
 
 if __name__ == "__main__":
