@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import datetime
 import json
+import math
 import os
 import platform
 import resource
@@ -64,13 +65,26 @@ def write_result(script: str, args: argparse.Namespace, results) -> str | None:
         return None
     data = {"benchmark": script_id(script), "mode": "quick" if args.quick else "full", "argv": sys.argv[1:]}
     data.update(stamp())
-    data["results"] = results
+    data["results"] = _finite(results)
     os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
     with open(path, "w") as fh:
-        json.dump(data, fh, indent=1, default=_plain)
+        json.dump(data, fh, indent=1, default=_plain, allow_nan=False)
         fh.write("\n")
     print(f"wrote {path}")
     return path
+
+
+def _finite(x):
+    """x with every NaN or infinite float replaced by None (strict JSON has no NaN)."""
+    if isinstance(x, float):
+        return x if math.isfinite(x) else None
+    if isinstance(x, dict):
+        return {k: _finite(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_finite(v) for v in x]
+    if hasattr(x, "tolist") and not isinstance(x, (str, bytes)):
+        return _finite(x.tolist())
+    return x
 
 
 def _plain(x):
