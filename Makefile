@@ -35,8 +35,7 @@ test-all: setup
 	$(PYTHON) -m pytest -q -m ""
 
 benchmark: setup
-	mkdir -p $(OUT)
-	$(PYTHON) benchmarks/run_all.py --out $(OUT)
+	$(PYTHON) benchmarks/run_all.py
 
 # C++ core under AddressSanitizer and UndefinedBehaviorSanitizer, tests run against it.
 sanitize:

@@ -1,45 +1,46 @@
-"""Runs every benchmark (tens of minutes on 2 cores); each prints its table and writes JSON/PNG.
+"""Runs every benchmark in its full mode, one after another, each writing its current result file
+under benchmarks/results/<folder>/<name>.json (tens of minutes to hours on 2 cores; `make benchmark`).
+With --quick every script runs on tiny levels (seconds each) and writes its file under --out.
 
-    python benchmarks/run_all.py [--out out] [--quick]
+    python benchmarks/run_all.py [--quick] [--out out/benchmarks] [--only paper/table1 ...]
 """
 import argparse
 import os
 import subprocess
 import sys
+import time
+from pathlib import Path
 
-HERE = os.path.dirname(os.path.abspath(__file__))
+HERE = Path(__file__).resolve().parent
+FOLDERS = ("paper", "three_d", "methods", "performance")
+
+
+def scripts():
+    """'<folder>/<name>' of every benchmark script."""
+    return [f"{d}/{p.stem}" for d in FOLDERS for p in sorted((HERE / d).glob("*.py"))]
 
 
 def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--out", default="out")
-    ap.add_argument("--quick", action="store_true", help="smaller levels (a few minutes)")
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--quick", action="store_true", help="tiny levels; results under --out")
+    ap.add_argument("--out", default=os.path.join("out", "benchmarks"), help="result folder of a quick run")
+    ap.add_argument("--only", nargs="+", default=None, help="folder/name of the scripts to run")
     a = ap.parse_args()
-    os.makedirs(a.out, exist_ok=True)
-    top = 7 if a.quick else 9
-    jobs = [
-        ["linear_levels.py", "--levels", "3", str(top), "--json", os.path.join(a.out, "linear_levels.json")],
-        ["scaling.py", "--cell", "triangle", "--levels", "3", str(top), "--out", a.out],
-        ["scaling.py", "--cell", "quad", "--levels", "3", str(top - 1), "--out", a.out],
-        ["work_precision.py", "--levels", "5", "6", "7"] + ([] if a.quick else ["8"]) + ["--out", a.out],
-        ["skip_work.py", "--level", str(top - 1), "--out", a.out],
-        ["stress.py", "--level", str(top - 2), "--out", a.out],
-        ["discretization_error.py", "--levels", "3", str(top - 2), "--reference", str(top), "--out", a.out],
-        # issue 11: adaptive Table 1 to level 9 (level 11 takes about an hour: Algorithm 1 at F >= 5)
-        ["adaptive_table1.py", "--levels", *[str(L) for L in sorted({3, 5, 7, top})], "--reference-level", str(top),
-         "--accuracy-adaptive", "3", str(top - 1), "--accuracy-uniform", "2", str(top - 3),
-         "--cost-adaptive", *[str(L) for L in range(5, top + 1)], "--cost-uniform", *[str(L) for L in range(4, top)],
-         "--out", a.out],
-    ]
-    if not a.quick:  # issue 4: Algorithm 1 at F = 5 up to the finest uniform level that fits (about 10 minutes)
-        jobs.append(["fixed_point_F5.py", "--start", "6", "--stop", "9", "--out", a.out])
-    for job in jobs:
-        print(f"== {' '.join(job)}", flush=True)
-        subprocess.run([sys.executable, os.path.join(HERE, job[0])] + job[1:], check=True)
-    print("== table1", flush=True)
-    subprocess.run([sys.executable, "-m", "contactmg", "table1", "--json", os.path.join(a.out, "table1.json"),
-                    "--plot", os.path.join(a.out, "table1.png"), "-q"], check=True)
+    failed = []
+    for name in a.only or scripts():
+        cmd = [sys.executable, str(HERE / f"{name}.py")]
+        if a.quick:
+            cmd += ["--quick", "--json", os.path.join(a.out, f"{name}.json")]
+        print(f"== {name}", flush=True)
+        t0 = time.perf_counter()
+        r = subprocess.run(cmd)
+        print(f"== {name}: exit status {r.returncode}, {time.perf_counter() - t0:.0f} s", flush=True)
+        if r.returncode != 0:
+            failed.append(name)
+    if failed:
+        print(f"failed: {' '.join(failed)}")
+    return 1 if failed else 0
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

@@ -1,16 +1,33 @@
 """Issue 15's bandwidth references (cpp/bandwidth.hpp) and the cycle's byte model
-(benchmarks/parallel_bandwidth.py). Not timed: the rates are only checked to be rates, the model's
+(benchmarks/performance/threads.py). Not timed: the rates are only checked to be rates, the model's
 visit counts against the coarse cycle's definition (mg/cycle.hpp)."""
 import math
-import sys
-from pathlib import Path
 
 import pytest
 
 from contactmg import _core
 
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "benchmarks"))
-from parallel_bandwidth import coarse_visits  # noqa: E402
+
+def coarse_visits(top: int, cycle: str) -> tuple:
+    """How often a coarse correction (mg/cycle.hpp) smooths each coarse level 0 .. top (level 0 is
+    solved instead) and forms its residual, restricts it and prolongates back (levels 1 .. top). A
+    W- or F-cycle visits level top a second time from the fine level, and each visit of a level of a
+    W/F-cycle visits the next coarser level twice (F: an F- then a V-cycle). The same count as the
+    byte model of benchmarks/performance/threads.py."""
+    smooth, resid = [0] * (top + 1), [0] * (top + 1)
+
+    def visit(l, t):
+        smooth[l] += 1
+        if l == 0:
+            return
+        for v in range(1 if t == "V" else 2):
+            resid[l] += 1
+            visit(l - 1, "V" if (t == "F" and v == 1) else t)
+
+    visit(top, cycle)
+    if cycle != "V":
+        visit(top, "V" if cycle == "F" else "W")
+    return smooth, resid
 
 
 @pytest.mark.parametrize("threads", [1, 2])

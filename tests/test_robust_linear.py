@@ -1,17 +1,30 @@
 """Robust linear corrections of TNNMG (issue 14, part 2): the algebraic line Gauss-Seidel
 (cpp/mg/line_smoother.hpp), the truncated linear cycle on the fine level and PCG with it as the
 preconditioner (cpp/mg/truncated_linear_cycle.hpp, cpp/mg/pcg.hpp)."""
-import os
+
 import sys
 
 import numpy as np
 import pytest
 
-from contactmg import _core, hertz
+from contactmg import (HERTZ_ARC, HERTZ_TOP, RECT_BOTTOM, RECT_TOP, ContactProblem, Coulomb, Dirichlet,
+                       Frictionless, Material, MeshHierarchy, PlaneObstacle, _core, hertz, rectangle)
 from contactmg.checks import contact_conditions
 
-sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "benchmarks"))
-import stress  # noqa: E402
+
+def hertz_scene(h, F=0.4, nu=0.28, push=-0.005, plane_y=0.0):
+    """The Hertz half disk on hierarchy h with another material, push or obstacle position."""
+    return ContactProblem(h, Material(2000.0, nu), [Dirichlet([HERTZ_TOP], (0.0, push))], contact_tags=[HERTZ_ARC],
+                          obstacle=PlaneObstacle((0.0, plane_y), (0.0, -1.0)),
+                          friction=Coulomb(F) if F > 0 else Frictionless())
+
+
+def layer(aspect, level=5):
+    """4 x 4 quads of aspect ratio `aspect` (long and flat), refined, pressed and sheared with
+    friction onto the rigid plane."""
+    h = MeshHierarchy.build(rectangle(4, 4, lx=aspect * 1.0, ly=1.0, cell="quad"), level)
+    return ContactProblem(h, Material(100.0, 0.3), [Dirichlet([RECT_TOP], (0.01, -0.01))], contact_tags=[RECT_BOTTOM],
+                          obstacle=PlaneObstacle((0.0, 0.0), (0.0, -1.0)), friction=Coulomb(0.3))
 
 
 def rel_diff(a, b):
@@ -64,14 +77,14 @@ def test_lines_follow_the_short_direction_and_reduce_to_points_without_anisotrop
     """Stretched quads (aspect 8): the lines run along the short direction y (nodes of one x) and
     hold most nodes; the same layer with square cells and the Hertz quads have no line of two or
     more nodes, so their linear correction is the point-block one."""
-    p = stress.layer(8, level=3)
+    p = layer(8, level=3)
     x = p.mesh.points
     lines = [l for l in p.solver.fine_lines() if len(l) > 1]
     assert sum(len(l) for l in lines) >= 0.75 * p.mesh.num_points  # all but the side columns and the clamped top
     for l in lines:
         assert np.ptp(x[l, 0]) < 1e-12  # one vertical line
         assert np.all(np.abs(np.diff(x[l, 1])) > 0)
-    for q in (stress.layer(1, level=3), hertz.hertz_problem("quad", 3, 0.4)):
+    for q in (layer(1, level=3), hertz.hertz_problem("quad", 3, 0.4)):
         assert max(len(l) for l in q.solver.fine_lines()) == 1
         assert all(max(len(l) for l in q.solver.coarse_lines(k)) == 1 for k in range(q.solver.num_levels - 1))
     # the Galerkin levels of the stretched layer keep their lines
@@ -83,7 +96,7 @@ def test_pcg_lowers_the_energy_error_monotonically():
     energy error E(w_k) - E(w*), E(w) = w^T K w / 2 - r^T w, falls in every iteration, with and
     without line smoothing, to the exact solution (checked by the residual K w - r, computed
     independently from the fine matrix); Dirichlet dofs stay zero."""
-    p = stress.layer(8, level=4)
+    p = layer(8, level=4)
     S = p.solver
     free = ~p.fixed.astype(bool)
     r = np.random.default_rng(2).normal(size=(p.mesh.num_points, 2))
@@ -103,7 +116,7 @@ def test_pcg_lowers_the_energy_error_monotonically():
 
 @pytest.fixture(scope="module")
 def layers():
-    return {L: stress.layer(8, level=L) for L in (3, 4, 5)}
+    return {L: layer(8, level=L) for L in (3, 4, 5)}
 
 
 def test_anisotropic_layer_converges_in_a_count_that_does_not_grow(layers):
@@ -139,7 +152,7 @@ def test_tnnmg_with_robust_corrections_agrees_with_algorithm2(layers):
             assert b.converged, (linear, lines, b.status)
             assert rel_diff(a, b) < 1e-8, (linear, lines)
     h = hertz.hertz_problem("triangle", 4, 0.4).hierarchy
-    q = stress.hertz_scene(h, nu=0.49)
+    q = hertz_scene(h, nu=0.49)
     a, b = q.solve("nmg", max_cycles=300), q.solve("tnnmg", max_cycles=300)
     assert a.converged and b.converged and rel_diff(a, b) < 1e-8
     # nearly incompressible: Algorithm 2 crawls (rate about 0.9); the PCG correction does not.
