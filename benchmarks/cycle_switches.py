@@ -75,7 +75,7 @@ def main():
     ap.add_argument("--threads", type=int, nargs="+", default=[1, 2])
     ap.add_argument("--json")
     a = ap.parse_args()
-    res = {"load_before": "%.2f" % os.getloadavg()[0], "stream": {f"core_{t}": _core.stream_triad(40_000_000, 5, t) for t in (1, 2)},
+    res = {"load_before": "%.2f" % os.getloadavg()[0], "stream": {f"core_{t}": _core.testing.stream_triad(40_000_000, 5, t) for t in (1, 2)},
            "rows": []}
     print("stream GB/s", res["stream"], "load", res["load_before"], flush=True)
     for case in a.case or ["hertz:9"]:

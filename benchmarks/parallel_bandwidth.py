@@ -73,15 +73,15 @@ def stream_rates() -> dict:
     with int32 columns (core_blocks_1, core_blocks3_1), numpy's sum (numpy_read_1)."""
     from contactmg import _core
     out = {"numpy_1": triad_gbs(), "numpy_read_1": numpy_read_gbs()}
-    if hasattr(_core, "stream_triad"):
+    if hasattr(_core.testing, "stream_triad"):
         for t in (1, 2):
-            out[f"core_{t}"] = _core.stream_triad(40_000_000, 5, t)
-    if hasattr(_core, "stream_read"):
+            out[f"core_{t}"] = _core.testing.stream_triad(40_000_000, 5, t)
+    if hasattr(_core.testing, "stream_read"):
         for t in (1, 2):
-            out[f"core_read_{t}"] = _core.stream_read(40_000_000, 5, t, 4)
-        out["core_read1_1"] = _core.stream_read(40_000_000, 5, 1, 1)
-        out["core_blocks_1"] = _core.stream_read_blocks(9_000_000, 5, 1, 2)
-        out["core_blocks3_1"] = _core.stream_read_blocks(4_000_000, 5, 1, 3)
+            out[f"core_read_{t}"] = _core.testing.stream_read(40_000_000, 5, t, 4)
+        out["core_read1_1"] = _core.testing.stream_read(40_000_000, 5, 1, 1)
+        out["core_blocks_1"] = _core.testing.stream_read_blocks(9_000_000, 5, 1, 2)
+        out["core_blocks3_1"] = _core.testing.stream_read_blocks(4_000_000, 5, 1, 3)
     return out
 
 
@@ -153,7 +153,7 @@ def cycle_bytes(p, S) -> dict:
     levels = S.num_levels - 1  # coarse levels 0 .. levels - 1
     top = levels - 1
     fine_n = p.mesh.num_points
-    A = matrix_bytes(S.fine_matrix())
+    A = matrix_bytes(_core.testing.fine_matrix(S))
     vec = lambda n: 8 * d * n
     # coarse sweeps read stored inverted diagonal blocks; the fine one forms them from the diagonal
     # block (its position is in the matrix's bytes)
@@ -168,7 +168,7 @@ def cycle_bytes(p, S) -> dict:
     coarse = coarse_stop23 = 0
     for l in range(1, levels):
         n = T[l - 1].n_fine  # T[l - 1] prolongs level l - 1 to level l
-        M = matrix_bytes(S.coarse_matrix(l))
+        M = matrix_bytes(_core.testing.coarse_matrix(S, l))
         tb = transfer_bytes(T[l - 1], d) + vec(T[l - 1].n_fine) + vec(T[l - 1].n_coarse)
         coarse += smooth[l] * nu * sweep(M, n) + resid[l] * (prod(M, n) + 2 * tb)
         smooth23 = (top - l + 1) if opt.cycle == "F" else 1
@@ -340,8 +340,8 @@ d, n = p.mesh.dim, p.mesh.num_points
 S = p.solver
 nb = lambda *arrs: int(sum(a.nbytes for a in arrs if isinstance(a, np.ndarray)))
 own = p.memory_bytes()  # by owner, nothing made again (a released hierarchy stays released)
-fine = S.fine_matrix().memory_bytes()
-coarse = sum(S.coarse_matrix(l).memory_bytes() for l in range(S.num_levels - 1))
+fine = _core.testing.fine_matrix(S).memory_bytes()
+coarse = sum(_core.testing.coarse_matrix(S, l).memory_bytes() for l in range(S.num_levels - 1))
 core = S.memory_bytes()
 results = nb(r.displacement, r.contact_force, r.friction_bound, r.node_state) + sum(v.nbytes for v in r.history.values())
 print(json.dumps(dict(dim=dim, level=level, cell=cell, dofs=d * n, cycles=r.cycles, converged=r.converged, peak_rss_bytes=peak,

@@ -26,7 +26,7 @@ def load() -> float:
 
 
 def rates() -> dict:
-    return {"core_triad_1": _core.stream_triad(40_000_000, 5, 1), "core_read_1": _core.stream_read(40_000_000, 5, 1, 4)}
+    return {"core_triad_1": _core.testing.stream_triad(40_000_000, 5, 1), "core_read_1": _core.testing.stream_read(40_000_000, 5, 1, 4)}
 
 
 def main():
