@@ -33,21 +33,21 @@ def coarse_visits(top: int, cycle: str) -> tuple:
 @pytest.mark.parametrize("threads", [1, 2])
 def test_reference_kernels_give_rates(threads):
     for streams in (1, 2, 4, 8):
-        g = _core.stream_read(1_000_003, 2, threads, streams)  # n not a multiple of the pieces
+        g = _core.testing.stream_read(1_000_003, 2, threads, streams)  # n not a multiple of the pieces
         assert math.isfinite(g) and g > 0
     for dim in (2, 3):
-        g = _core.stream_read_blocks(100_000, 2, threads, dim)
+        g = _core.testing.stream_read_blocks(100_000, 2, threads, dim)
         assert math.isfinite(g) and g > 0
-    assert _core.stream_triad(1_000_000, 2, threads) > 0
+    assert _core.testing.stream_triad(1_000_000, 2, threads) > 0
 
 
 def test_reference_kernels_refuse_bad_input():
     with pytest.raises(ValueError, match="streams"):
-        _core.stream_read(1_000_000, 1, 1, 3)
+        _core.testing.stream_read(1_000_000, 1, 1, 3)
     with pytest.raises(ValueError, match="dim"):
-        _core.stream_read_blocks(1_000_000, 1, 1, 4)
+        _core.testing.stream_read_blocks(1_000_000, 1, 1, 4)
     with pytest.raises(ValueError):
-        _core.stream_read(10, 1, 1, 1)
+        _core.testing.stream_read(10, 1, 1, 1)
 
 
 def test_coarse_visits_follow_the_cycle():

@@ -72,7 +72,7 @@ def test_bound_restriction_keeps_corrections_feasible_through_negative_boundary_
     lo[nodes] = -rng.uniform(0, 1, (len(nodes), 2))
     hi[nodes] = rng.uniform(0, 1, (len(nodes), 2))
     hi[nodes[::3], 0] = 0.0  # some bounds tight on one side
-    lc, hc = _core.restrict_bounds_2D(nf, nc, tb.ptr, tb.parent, tb.weight, None, lo, hi)
+    lc, hc = _core.testing.restrict_bounds_2D(nf, nc, tb.ptr, tb.parent, tb.weight, None, lo, hi)
     assert np.all(lc <= 0) and np.all(hc >= 0)
     Pb = tb.matrix()
     finite = np.isfinite(lc) & np.isfinite(hc)

@@ -30,7 +30,7 @@ def test_friction_hessian_3d_matches_finite_differences(seed):
     rng = np.random.default_rng(seed)
     u = rng.normal(size=3)
     s = abs(rng.normal()) + 0.1
-    H = _core.friction_hessian_3D(s, u)
+    H = _core.testing.friction_hessian_3D(s, u)
     h = 1e-6
     fd = np.stack([(friction_gradient(s, u + h * e) - friction_gradient(s, u - h * e)) / (2 * h) for e in np.eye(3)], axis=1)
     np.testing.assert_allclose(H, fd, atol=1e-7 * s / np.linalg.norm(u[1:]))
@@ -40,10 +40,10 @@ def test_friction_hessian_3d_matches_finite_differences(seed):
 
 
 def test_friction_hessian_vanishes_with_one_tangential_direction():
-    assert np.all(_core.friction_hessian_2D(2.0, np.array([0.3, -0.7])) == 0)
+    assert np.all(_core.testing.friction_hessian_2D(2.0, np.array([0.3, -0.7])) == 0)
     # 3D with one tangential component fixed: friction acts on one direction only
-    assert np.all(_core.friction_hessian_3D(2.0, np.array([0.3, -0.7, 0.2]), 0b01) == 0)
-    assert np.all(_core.friction_hessian_3D(2.0, np.array([0.3, 0.0, 0.0])) == 0)  # sticking: no Hessian
+    assert np.all(_core.testing.friction_hessian_3D(2.0, np.array([0.3, -0.7, 0.2]), 0b01) == 0)
+    assert np.all(_core.testing.friction_hessian_3D(2.0, np.array([0.3, 0.0, 0.0])) == 0)  # sticking: no Hessian
 
 
 # -- bound restriction (DESIGN section 4) ------------------------------------------------------
@@ -64,7 +64,7 @@ def test_bound_restriction_empty_and_last_columns():
     hi = np.full((3, 2), INF)
     hi[1, 0] = 0.2   # an inactive normal with slack 0.2 at a fine node between coarse 0 and 2
     lo[2, 1] = -0.1  # a sliding tangential at the fine node of the last column
-    lc, hc = _core.restrict_bounds_2D(3, 4, ptr, parent, weight, None, lo, hi)
+    lc, hc = _core.testing.restrict_bounds_2D(3, 4, ptr, parent, weight, None, lo, hi)
     assert np.all(lc[1] == -INF) and np.all(hc[1] == INF)  # the empty column stays unbounded
     assert hc[0, 0] == 0.2 and hc[2, 0] == 0.2             # sum |w| = 1: the bound itself
     assert lc[3, 1] == -0.1 and hc[3, 1] == INF            # the last column gets its bound
@@ -72,7 +72,7 @@ def test_bound_restriction_empty_and_last_columns():
     # a truncated fine dof (mask 0) passes no bound down
     mask = np.ones((3, 2), np.uint8)
     mask[2, 1] = 0
-    lc, hc = _core.restrict_bounds_2D(3, 4, ptr, parent, weight, mask, lo, hi)
+    lc, hc = _core.testing.restrict_bounds_2D(3, 4, ptr, parent, weight, mask, lo, hi)
     assert lc[3, 1] == -INF
 
 
@@ -86,7 +86,7 @@ def test_bound_restriction_is_monotone_on_random_transfers():
         ptr, parent, weight = prolongation(nf, rows)
         lo = np.where(rng.random((nf, 2)) < 0.5, -rng.random((nf, 2)), -INF)
         hi = np.where(rng.random((nf, 2)) < 0.5, rng.random((nf, 2)), INF)
-        lc, hc = _core.restrict_bounds_2D(nf, nc, ptr, parent, weight, None, lo, hi)
+        lc, hc = _core.testing.restrict_bounds_2D(nf, nc, ptr, parent, weight, None, lo, hi)
         assert np.all(lc <= 0) and np.all(hc >= 0)
         for _ in range(50):
             c = np.clip(rng.normal(size=(nc, 2)), np.maximum(lc, -10), np.minimum(hc, 10))
@@ -109,13 +109,13 @@ def test_rows_to_smooth_hook(hertz):
     # listing every row explicitly is the default
     every = p._new_core_solver(p.law, p.default_cycle)
     for lvl in range(every.num_levels - 1):
-        every.set_rows_to_smooth(lvl, np.arange(every.coarse_matrix(lvl).shape[0] // 2, dtype=np.int64))
+        every.set_rows_to_smooth(lvl, np.arange(_core.testing.coarse_matrix(every, lvl).shape[0] // 2, dtype=np.int64))
     r_all = every.solve()
     np.testing.assert_array_equal(r_all["history"]["correction_norm"], base["history"]["correction_norm"])
     # smoothing only half of the rows of the second-finest level changes the cycle, not the answer
     sub = p._new_core_solver(p.law, p.default_cycle)
     top = sub.num_levels - 2
-    n_top = sub.coarse_matrix(top).shape[0] // 2
+    n_top = _core.testing.coarse_matrix(sub, top).shape[0] // 2
     sub.set_rows_to_smooth(top, np.arange(0, n_top, 2, dtype=np.int64))
     r_sub = sub.solve()
     assert r_sub["converged"], r_sub["status"]

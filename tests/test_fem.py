@@ -113,7 +113,7 @@ def test_galerkin_product_equals_coarse_assembly(cell):
     for l in (0, 1):
         coarse, fine, T = h.meshes[l], h.meshes[l + 1], h.transfers[l]
         Af = _core.assemble_elasticity(fine.points, fine.cells, cell, MAT.E, MAT.nu)
-        C = to_scipy(_core.galerkin_product_2D(Af, T.n_coarse, T.ptr, T.parent, T.weight)).toarray()
+        C = to_scipy(_core.testing.galerkin_product_2D(Af, T.n_coarse, T.ptr, T.parent, T.weight)).toarray()
         Ac = stiffness(coarse).toarray()
         np.testing.assert_allclose(C, Ac, atol=1e-13 * np.abs(Ac).max())
         P = sp.kron(T.matrix(), sp.eye(2))

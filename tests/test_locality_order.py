@@ -6,6 +6,7 @@ import pytest
 
 from contactmg.cylinders import cylinders_problem
 from contactmg.hertz import hertz_problem
+from contactmg import _core
 
 
 def _built(make, storage="coloured"):
@@ -32,7 +33,7 @@ def test_locality_order_keeps_the_users_numbering():
     user, new = _built(make, "lexicographic"), _built(make)
     So, Sn = user.solver, new.solver
     assert Sn.renumbered and not So.renumbered
-    for get in [lambda S: S.fine_matrix()] + [lambda S, l=l: S.coarse_matrix(l) for l in range(So.num_levels - 1)]:
+    for get in [lambda S: _core.testing.fine_matrix(S)] + [lambda S, l=l: _core.testing.coarse_matrix(S, l) for l in range(So.num_levels - 1)]:
         Mo, Mn = get(So), get(Sn)
         assert np.array_equal(Mo.indptr, Mn.indptr) and np.array_equal(Mo.indices, Mn.indices)
         assert np.abs(Mo.data - Mn.data).max() <= 1e-13 * np.abs(Mo.data).max()

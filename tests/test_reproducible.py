@@ -66,7 +66,7 @@ def test_sphere_3d_solves_repeat_bit_for_bit(sphere3):
     for _ in range(3):  # the third and fourth solves differed from the second as well
         same_bits(first, p.solve(threads=1))
     # the independent check's sweeps leave the next solve as it was
-    p.solver.smooth(np.asarray(first.displacement), 2)
+    _core.testing.smooth(p.solver, np.asarray(first.displacement), 2)
     same_bits(first, p.solve(threads=1))
     fresh = sphere.sphere_problem("tetra", 3, 0.4, hierarchy=sphere3).solve(threads=1)
     same_bits(first, fresh)
@@ -101,7 +101,6 @@ def test_separate_processes_give_the_same_hashes():
     assert a[0] == a[1] == a[3]  # every default solve the first one's bits, before and after the coupling's
 
 
-@pytest.mark.skipif(not hasattr(_core, "_coarsest_update_solve"), reason="core without the coarsest solver's test hook")
 def test_coarsest_low_rank_update_takes_the_changed_columns():
     # S - S0 with an entry (5, 9) whose row 9 is unchanged (Galerkin matrices are symmetric to
     # round-off only): the correction's rows must include 9, else M(pos[5], pos[9] = -1) is written
@@ -113,6 +112,6 @@ def test_coarsest_low_rank_update_takes_the_changed_columns():
     S[5, 9] += 1e-3
     S[20, 20] += 0.5
     b = np.linspace(1.0, 2.0, n)
-    x, rank, factorizations = _core._coarsest_update_solve(S0, S, b)
+    x, rank, factorizations = _core.testing.coarsest_update_solve(S0, S, b)
     assert rank == 3 and factorizations == 1
     assert np.abs(S @ x - b).max() <= 1e-13 * np.abs(b).max()

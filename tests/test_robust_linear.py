@@ -59,14 +59,14 @@ def test_line_smoother_is_exact_on_a_chain():
     A, K = block_chain(n)
     rng = np.random.default_rng(1)
     b = rng.normal(size=(n, 2))
-    x, lines = _core.line_gauss_seidel_2D(A, b, rng.normal(size=(n, 2)), 1)
+    x, lines = _core.testing.line_gauss_seidel_2D(A, b, rng.normal(size=(n, 2)), 1)
     assert len(lines) == 1 and sorted(lines[0]) == list(range(n))
     assert np.abs(np.diff(lines[0])).max() == 1  # in chain order
     exact = np.linalg.solve(K, b.ravel())
     assert np.abs(x.ravel() - exact).max() < 1e-12 * np.abs(exact).max()
     active = (rng.random((n, 2)) > 0.2).astype(np.uint8)
     m = active.ravel().astype(bool)
-    x, _ = _core.line_gauss_seidel_2D(A, b * active, np.zeros((n, 2)), 1, active=active)
+    x, _ = _core.testing.line_gauss_seidel_2D(A, b * active, np.zeros((n, 2)), 1, active=active)
     exact = np.zeros(2 * n)
     exact[m] = np.linalg.solve(K[np.ix_(m, m)], b.ravel()[m])
     assert np.all(x.ravel()[~m] == 0)
@@ -79,16 +79,16 @@ def test_lines_follow_the_short_direction_and_reduce_to_points_without_anisotrop
     more nodes, so their linear correction is the point-block one."""
     p = layer(8, level=3)
     x = p.mesh.points
-    lines = [l for l in p.solver.fine_lines() if len(l) > 1]
+    lines = [l for l in _core.testing.fine_lines(p.solver) if len(l) > 1]
     assert sum(len(l) for l in lines) >= 0.75 * p.mesh.num_points  # all but the side columns and the clamped top
     for l in lines:
         assert np.ptp(x[l, 0]) < 1e-12  # one vertical line
         assert np.all(np.abs(np.diff(x[l, 1])) > 0)
     for q in (layer(1, level=3), hertz.hertz_problem("quad", 3, 0.4)):
-        assert max(len(l) for l in q.solver.fine_lines()) == 1
-        assert all(max(len(l) for l in q.solver.coarse_lines(k)) == 1 for k in range(q.solver.num_levels - 1))
+        assert max(len(l) for l in _core.testing.fine_lines(q.solver)) == 1
+        assert all(max(len(l) for l in _core.testing.coarse_lines(q.solver, k)) == 1 for k in range(q.solver.num_levels - 1))
     # the Galerkin levels of the stretched layer keep their lines
-    assert max(len(l) for l in p.solver.coarse_lines(p.solver.num_levels - 2)) > 4
+    assert max(len(l) for l in _core.testing.coarse_lines(p.solver, p.solver.num_levels - 2)) > 4
 
 
 def test_pcg_lowers_the_energy_error_monotonically():
@@ -102,15 +102,15 @@ def test_pcg_lowers_the_energy_error_monotonically():
     r = np.random.default_rng(2).normal(size=(p.mesh.num_points, 2))
     rm = np.where(free, r, 0.0)
     for lines in (True, False):
-        w, e = S.linear_solve(r, 40, 0.0, lines=lines)
-        res = np.where(free, S.fine_matrix().matvec(w), 0.0) - rm
+        w, e = _core.testing.linear_solve(S, r, 40, 0.0, lines=lines)
+        res = np.where(free, _core.testing.fine_matrix(S).matvec(w), 0.0) - rm
         assert np.abs(res).max() < 1e-8 * np.abs(rm).max()
         assert np.all(w[~free] == 0)
         err = e - (-0.5 * np.sum(w * rm))  # E(w*) = -r^T w* / 2
         assert err[0] > 0 and np.all(np.diff(err) <= 1e-13 * err[0]), lines
         assert err[len(err) // 2] < 1e-6 * err[0]
         # the stop rule: iterations end once a step's decrease is below reduction^2 of the first
-        w1, e1 = S.linear_solve(r, 40, 0.1, lines=lines)
+        w1, e1 = _core.testing.linear_solve(S, r, 40, 0.1, lines=lines)
         assert 2 <= len(e1) - 1 < len(e) - 1 and e1[-1] < e1[1]
 
 

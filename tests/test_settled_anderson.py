@@ -60,7 +60,7 @@ def affine_map(m, reps, seed):
 def test_slot_storage_gives_the_textbook_iterates(reps, refuse_every):
     M, c, x0 = affine_map(40, reps, 1)
     steps = 9
-    xs, mixed = _core.anderson_iterates(M, c, x0, steps, refuse_every)
+    xs, mixed = _core.testing.anderson_iterates(M, c, x0, steps, refuse_every)
     ref, ref_mixed = textbook(M, c, x0, steps, refuse_every)
     assert mixed.astype(bool).tolist() == ref_mixed.tolist()
     assert mixed.sum() >= 4  # the history was full (depth 3) and its slots rotated
@@ -69,6 +69,6 @@ def test_slot_storage_gives_the_textbook_iterates(reps, refuse_every):
 
 def test_two_threads_mix_bit_for_bit():
     M, c, x0 = affine_map(40, 600, 2)  # 24,000 entries: several chunks of the sums
-    a, ma = _core.anderson_iterates(M, c, x0, 8, 0, threads=1)
-    b, mb = _core.anderson_iterates(M, c, x0, 8, 0, threads=2)
+    a, ma = _core.testing.anderson_iterates(M, c, x0, 8, 0, threads=1)
+    b, mb = _core.testing.anderson_iterates(M, c, x0, 8, 0, threads=2)
     assert np.array_equal(a, b) and np.array_equal(ma, mb)

@@ -508,7 +508,7 @@ class ContactProblem:
             return
         h = self.hierarchy
         for level in range(1, h.levels - 1):
-            if core.coarse_matrix(level).shape[0] != h.meshes[level].num_points * self.mesh.dim:
+            if core.level_sizes[level] != h.meshes[level].num_points:
                 return  # unknowns other than the mesh nodes (a subclass's basis): keep every row
         for level in range(1, h.levels - 1):
             core.set_rows_to_smooth(level, h.changed_nodes(level))

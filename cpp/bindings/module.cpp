@@ -1,0 +1,27 @@
+// The compiled core of contactmg: the module, its parts by subject (bind_fem.cpp, bind_solver.cpp)
+// and the submodule `testing` of the entry points only tests and benchmarks call (bind_testing.cpp).
+#include <cstdlib>  // defines __GLIBC__ where it is glibc
+#ifdef __GLIBC__
+#include <malloc.h>
+#endif
+#include "bindings/common.hpp"
+#include "parallel.hpp"
+
+PYBIND11_MODULE(_core, m) {
+  using namespace cmg;
+  using namespace cmg::bindings;
+  m.doc() = "contactmg compiled core";
+#ifdef __GLIBC__
+  // Allocations of 1 MiB and more get pages of their own and go back to the system when freed.
+  // glibc's default threshold grows to 32 MiB after the first large free, and then the level-sized
+  // temporaries of setup and of a solve's results stayed in the heap: 28 MiB of the peak at level 9
+  // (docs/dev/decisions/0010-memory-peak.md).
+  mallopt(M_MMAP_THRESHOLD, 1 << 20);
+#endif
+  bind_fem(m);
+  bind_solver(m);
+  m.def("openmp", [] { return have_openmp(); }, "whether the core was built with OpenMP threads");
+  m.def("max_threads", [] { return max_threads(); }, "the cores the threads of a solve may use (threads=0)");
+  py::module_ testing = m.def_submodule("testing", "entry points for tests and benchmarks: the core's pieces on their own");
+  bind_testing(testing);
+}
