@@ -22,6 +22,7 @@ from _common import parser, write_result  # noqa: E402
 WORKER = r'''
 import json, resource, sys
 import numpy as np
+from contactmg import _core
 def status(key):  # VmRSS (now) or VmHWM (peak so far) in bytes
     with open("/proc/self/status") as fh:
         for line in fh:
@@ -47,8 +48,8 @@ stage("solve")
 d, n = p.mesh.dim, p.mesh.num_points
 S = p.solver
 own = p.memory_bytes()
-fine = S.fine_matrix().memory_bytes()
-coarse = sum(S.coarse_matrix(l).memory_bytes() for l in range(S.num_levels - 1))
+fine = _core.testing.fine_matrix(S).memory_bytes()
+coarse = sum(_core.testing.coarse_matrix(S, l).memory_bytes() for l in range(S.num_levels - 1))
 core = S.memory_bytes()
 nb = lambda *arrs: int(sum(a.nbytes for a in arrs if isinstance(a, np.ndarray)))
 results = nb(r.displacement, r.contact_force, r.friction_bound, r.node_state) + sum(v.nbytes for v in r.history.values())

@@ -27,7 +27,7 @@ PHASES = ("presmooth", "linearize", "coarse_update", "coarse_correction", "posts
 
 def _stream_module():
     """The core's stream measurements (test-only entry points)."""
-    return getattr(_core, "testing", _core)
+    return _core.testing
 
 
 def stream_rates(n=40_000_000, repeats=5):
@@ -83,13 +83,13 @@ def cycle_bytes(p):
     vec = lambda n: 8 * d * n  # noqa: E731
     T = p.hierarchy.transfers
     tbytes = lambda t: len(t.parent) * 12 + 8 * (t.n_fine + 1) + vec(t.n_fine) + vec(t.n_coarse)  # noqa: E731
-    A, n = S.fine_matrix().memory_bytes(), p.mesh.num_points
+    A, n = _core.testing.fine_matrix(S).memory_bytes(), p.mesh.num_points
     fine = nu * (A + 3 * vec(n)) + 2 * (A + 2 * vec(n)) + 2 * tbytes(T[-1])
     levels = S.num_levels - 1
     smooth, resid = coarse_visits(levels - 1, opt.cycle) if levels >= 1 else ([], [])
     coarse = 0
     for l in range(1, levels):
-        m, M = T[l - 1].n_fine, S.coarse_matrix(l).memory_bytes()
+        m, M = T[l - 1].n_fine, _core.testing.coarse_matrix(S, l).memory_bytes()
         coarse += smooth[l] * nu * (M + 8 * d * d * m + 3 * vec(m)) + resid[l] * (M + 2 * vec(m) + 2 * tbytes(T[l - 1]))
     return {"fine": fine, "coarse": coarse, "total": fine + coarse, "sweep": A + 3 * vec(n)}
 
