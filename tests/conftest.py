@@ -1,10 +1,10 @@
 import numpy as np
 import pytest
 
-from contactmg.generators import rectangle
-from contactmg.hierarchy import MeshHierarchy
-from contactmg.material import Material
-from contactmg.problem import ContactProblem, Dirichlet
+from contactmg.mesh.generators import rectangle
+from contactmg.mesh.hierarchy import MeshHierarchy
+from contactmg.model.material import Material
+from contactmg.solve.contact_problem import ContactProblem, Dirichlet
 
 
 @pytest.fixture

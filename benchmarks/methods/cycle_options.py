@@ -26,8 +26,8 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from _common import parser, write_result  # noqa: E402
 
-from contactmg.checks import VIOLATION_TOL, contact_conditions  # noqa: E402
-from contactmg.hertz import hertz_adaptive_hierarchy, hertz_problem, hertz_problem_on  # noqa: E402
+from contactmg.results.checks import VIOLATION_TOL, contact_conditions  # noqa: E402
+from contactmg.examples.hertz import hertz_adaptive_hierarchy, hertz_problem, hertz_problem_on  # noqa: E402
 
 VARIANTS = {
     "default": {},
@@ -52,12 +52,12 @@ def cases(which, levels, frictions, uniform_levels, sphere_level, cork_level):
             for L in uniform_levels:
                 yield f"hertz uniform L{L}", F, lambda L=L, F=F: hertz_problem("triangle", L, F)
     if "sphere" in which:
-        from contactmg.sphere import sphere_adaptive_hierarchy, sphere_problem_on
+        from contactmg.examples.sphere import sphere_adaptive_hierarchy, sphere_problem_on
         hs = sphere_adaptive_hierarchy(sphere_level, 0.4)
         for F in (0.4, 1.0):
             yield f"sphere tetra adaptive L{sphere_level}", F, lambda F=F: sphere_problem_on(hs, F)
     if "cork" in which:
-        from contactmg.cork import cork_problem
+        from contactmg.examples.cork import cork_problem
         for F in (0.0, 0.4):
             yield f"cork L{cork_level}", F, lambda F=F: cork_problem(cork_level, F)
 

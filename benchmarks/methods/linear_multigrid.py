@@ -18,8 +18,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from _common import parser, write_result  # noqa: E402
 
 import contactmg as cm  # noqa: E402
-from contactmg import cork  # noqa: E402
-from contactmg.quality_3d import dihedral_angles, radius_ratio, scaled_jacobian  # noqa: E402
+from contactmg.examples import cork  # noqa: E402
+from contactmg.mesh.quality import dihedral_angles, radius_ratio, scaled_jacobian  # noqa: E402
 
 
 def contraction(problem, cycles=14, seed=0):

@@ -17,9 +17,9 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from _common import parser, write_result  # noqa: E402
 
-from contactmg.generators import HERTZ_TOP  # noqa: E402
-from contactmg.hertz import TOP_DISPLACEMENT, hertz_problem  # noqa: E402
-from contactmg.loadpath import two_phase_path  # noqa: E402
+from contactmg.mesh.generators import HERTZ_TOP  # noqa: E402
+from contactmg.examples.hertz import TOP_DISPLACEMENT, hertz_problem  # noqa: E402
+from contactmg.solve.loadpath import two_phase_path  # noqa: E402
 
 
 def main():

@@ -1,5 +1,5 @@
 """Robustness of Algorithm 2: numerical stress scenes and hard Coulomb cases, each result checked
-against the discrete contact conditions (contactmg.checks.contact_conditions; a relative violation
+against the discrete contact conditions (contactmg.results.checks.contact_conditions; a relative violation
 <= VIOLATION_TOL counts as verified).
 
 scenes   the Hertz half disk at one level with F from 0 to 1000, nearly incompressible material
@@ -22,8 +22,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from _common import parser, write_result  # noqa: E402
 
 import contactmg as cm  # noqa: E402
-from contactmg.checks import VIOLATION_TOL, contact_conditions  # noqa: E402
-from contactmg.hertz import hertz_adaptive_hierarchy, hertz_problem  # noqa: E402
+from contactmg.results.checks import VIOLATION_TOL, contact_conditions  # noqa: E402
+from contactmg.examples.hertz import hertz_adaptive_hierarchy, hertz_problem  # noqa: E402
 
 
 def hertz_scene(h, F=0.4, nu=0.28, push=-0.005, plane_y=0.0):
@@ -76,7 +76,7 @@ def coulomb_cases(names, adaptive_levels=(9, 11), uniform_levels=(8, 9), sphere_
         if f"uniform{L}" in names:
             yield f"uniform tri L{L} F=5", lambda L=L: hertz_problem(levels=L, friction=5.0)
     if f"sphere{sphere_level}" in names:
-        from contactmg.sphere import sphere_problem
+        from contactmg.examples.sphere import sphere_problem
         for F in (0.4, 40.0):
             yield f"sphere tetra L{sphere_level} F={F:g}", lambda F=F: sphere_problem("tetra", sphere_level, F)
 

@@ -24,8 +24,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from _common import parser, write_result  # noqa: E402
 from robustness import hertz_scene, layer  # noqa: E402
 
-from contactmg import hertz  # noqa: E402
-from contactmg.checks import contact_conditions  # noqa: E402
+from contactmg.examples import hertz  # noqa: E402
+from contactmg.results.checks import contact_conditions  # noqa: E402
 
 METHODS = {"nmg": ("nmg", {}), "tnnmg": ("tnnmg", {}), "tnnmg-cycle": ("tnnmg", {"linear": "cycle"}),
            "tnnmg-coarse": ("tnnmg", {"linear": "coarse", "lines": False})}

@@ -24,8 +24,8 @@ from _common import parser, write_result  # noqa: E402
 WORKER = r"""
 import json, sys, resource
 import numpy as np
-from contactmg import hertz
-from contactmg.checks import contact_conditions
+from contactmg.examples import hertz
+from contactmg.results.checks import contact_conditions
 cell, L, F = sys.argv[1], int(sys.argv[2]), float(sys.argv[3])
 p = hertz.hertz_problem(cell, L, F, coulomb_at_zero=True)
 out = {"level": L, "cell": cell, "friction": F, "dofs": int(2 * p.mesh.num_points)}

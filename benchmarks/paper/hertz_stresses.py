@@ -16,7 +16,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from _common import parser, write_result  # noqa: E402
 
-from contactmg import hertz  # noqa: E402
+from contactmg.examples import hertz  # noqa: E402
 
 
 def energy(problem, v):

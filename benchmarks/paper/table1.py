@@ -18,8 +18,8 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from _common import parser, write_result  # noqa: E402
 
-from contactmg.hertz import ADAPTIVE_FRICTION, PAPER_FRICTIONS, hertz_adaptive_hierarchy  # noqa: E402
-from contactmg.table1 import (FIXED_POINT_STALL_WINDOW, failed_runs, format_table, merge_levels,  # noqa: E402
+from contactmg.examples.hertz import ADAPTIVE_FRICTION, PAPER_FRICTIONS, hertz_adaptive_hierarchy  # noqa: E402
+from contactmg.examples.table1 import (FIXED_POINT_STALL_WINDOW, failed_runs, format_table, merge_levels,  # noqa: E402
                               save_figures, table1)
 
 # Table 1 of the paper (fixed-point iterations, TOL = 1e-9; None = no convergence) on its adaptive

@@ -34,10 +34,10 @@ def stage(name):
 dim, cell, level = int(sys.argv[1]), sys.argv[2], int(sys.argv[3])
 stage("imports")
 if dim == 2:
-    from contactmg.hertz import hertz_problem
+    from contactmg.examples.hertz import hertz_problem
     p = hertz_problem(cell, level, 0.4)
 else:
-    from contactmg.sphere import sphere_problem
+    from contactmg.examples.sphere import sphere_problem
     p = sphere_problem(cell, levels=level, friction=0.4)
 p.release_hierarchy = True
 stage("problem")

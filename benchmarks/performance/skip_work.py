@@ -28,7 +28,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from _common import parser, write_result  # noqa: E402
 
 import contactmg as cm  # noqa: E402
-from contactmg import hertz  # noqa: E402
+from contactmg.examples import hertz  # noqa: E402
 
 
 def best_of(problem, n=3, **kw):
@@ -71,7 +71,7 @@ def part_outputs(cell, level):
     """Seconds of the solve against the outputs derived from it on request."""
     from matplotlib.figure import Figure
 
-    from contactmg.plots import plot_boundary_stress
+    from contactmg.results.plots import plot_boundary_stress
 
     p = hertz.hertz_problem(cell, level, 0.4)
     r = p.solve()

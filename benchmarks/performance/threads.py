@@ -136,7 +136,7 @@ def time_case(label, make, repeats, threads, stream):
 
 def counts(levels, frictions):
     """Cycle counts of the coloured and the lexicographic sweeps over Hertz levels."""
-    from contactmg.hertz import hertz_problem
+    from contactmg.examples.hertz import hertz_problem
     rows = []
     for L in range(levels[0], levels[1] + 1):
         for F in frictions:
@@ -161,8 +161,8 @@ def main():
     a = ap.parse_args()
     if a.quick:
         a.levels, a.levels_3d, a.repeats, a.counts = [5], [2], 1, [3, 4]
-    from contactmg.hertz import hertz_problem
-    from contactmg.sphere import sphere_problem
+    from contactmg.examples.hertz import hertz_problem
+    from contactmg.examples.sphere import sphere_problem
     n = 4_000_000 if a.quick else 40_000_000
     stream = stream_rates(n, 2 if a.quick else 5)
     print("stream GB/s:", {k: round(v, 2) for k, v in stream.items()}, f"load {os.getloadavg()[0]:.2f}", flush=True)

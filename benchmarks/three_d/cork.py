@@ -13,7 +13,7 @@ from _common import parser, run_child, write_result  # noqa: E402
 
 CHILD = r"""
 import json, resource, sys, time
-from contactmg import cork
+from contactmg.examples import cork
 L, layers = int(sys.argv[1]), int(sys.argv[2])
 out = {"level": L}
 for F in (0.0, 0.4):

@@ -17,8 +17,8 @@ from _common import parser, run_child, write_result  # noqa: E402
 
 CHILD = r"""
 import json, resource, sys, time
-from contactmg import sphere
-from contactmg.results import STICK, SLIP
+from contactmg.examples import sphere
+from contactmg.results.result import STICK, SLIP
 L, cell, kind = int(sys.argv[1]), sys.argv[2], sys.argv[3]
 frictions = [float(f) for f in sys.argv[4].split(",")]
 out = {"level": L, "cell": cell, "hierarchy": kind, "cycles": {}, "solve_seconds": {}, "converged": {}}

@@ -22,8 +22,8 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from _common import parser, run_child, write_result  # noqa: E402
 
-from contactmg.cylinders import RADIUS, cylinders_problem, two_body_halfwidth, two_body_peak_pressure  # noqa: E402
-from contactmg.hertz_fit import elliptic_fit  # noqa: E402
+from contactmg.examples.cylinders import RADIUS, cylinders_problem, two_body_halfwidth, two_body_peak_pressure  # noqa: E402
+from contactmg.results.hertz_fit import elliptic_fit  # noqa: E402
 
 MATERIALS = {"equal": (2000.0, 0.28), "unequal": (4000.0, 0.2)}
 
@@ -66,9 +66,9 @@ def cylinders(levels, frictions):
 SPHERES_CHILD = r"""
 import json, resource, sys, time
 import numpy as np
-from contactmg import spheres
-from contactmg.sphere import central_pressure, radius_of
-from contactmg.results import STICK, SLIP
+from contactmg.examples import spheres
+from contactmg.examples.sphere import central_pressure, radius_of
+from contactmg.results.result import STICK, SLIP
 L, E2, nu2 = int(sys.argv[1]), float(sys.argv[2]), float(sys.argv[3])
 frictions = [float(f) for f in sys.argv[4].split(",")]
 out = {"level": L, "E2": E2, "nu2": nu2, "cycles": {}, "rate": {}, "solve_seconds": {}, "converged": {}, "violation": {}}

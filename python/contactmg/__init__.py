@@ -5,22 +5,22 @@ import os as _os
 # waiter on an occupied core made a 2-thread solve many times slower than 1 thread there).
 _os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 from . import _core  # noqa: F401,E402
-from .friction import Coulomb, Frictionless, Tresca
-from .frames import contact_frames
-from .generators import (HERTZ_ARC, HERTZ_TOP, RECT_BOTTOM, RECT_LEFT, RECT_RIGHT, RECT_TOP, CircleProjector,
+from .model.friction import Coulomb, Frictionless, Tresca
+from .model.frames import contact_frames
+from .mesh.generators import (HERTZ_ARC, HERTZ_TOP, RECT_BOTTOM, RECT_LEFT, RECT_RIGHT, RECT_TOP, CircleProjector,
                          hertz_half_disk, hertz_projector, rectangle)
-from .hierarchy import MeshHierarchy, Transfer
-from .io import read_mesh, to_meshio, write_mesh
-from .material import Material
-from .mesh import Mesh
-from .obstacle import NodalObstacle, PlaneObstacle
-from .problem import ContactBoundary, ContactProblem, CycleOptions, Dirichlet
-from .results import ContactResult
+from .mesh.hierarchy import MeshHierarchy, Transfer
+from .mesh.io import read_mesh, to_meshio, write_mesh
+from .model.material import Material
+from .mesh.mesh import Mesh
+from .model.obstacle import NodalObstacle, PlaneObstacle
+from .solve.contact_problem import ContactBoundary, ContactProblem, CycleOptions, Dirichlet
+from .results.result import ContactResult
 
 # 3D (issue 10)
-from .generators_3d import (BALL_SURFACE, BALL_TOP, CORK_BOTTOM, CORK_SIDE, CORK_TOP, CylinderProjector,  # noqa: E402
+from .mesh.generators_3d import (BALL_SURFACE, BALL_TOP, CORK_BOTTOM, CORK_SIDE, CORK_TOP, CylinderProjector,  # noqa: E402
                             SphereProjector, ball_projector, box, cylinder, half_ball)
-from .obstacle import RevolutionObstacle, SphereObstacle  # noqa: E402
+from .model.obstacle import RevolutionObstacle, SphereObstacle  # noqa: E402
 
 __version__ = "0.1.0"
 

@@ -1,0 +1,397 @@
+"""Nested mesh hierarchies by uniform refinement or by adaptive newest-vertex bisection, with
+boundary projection."""
+from __future__ import annotations
+
+import os
+import time
+from dataclasses import dataclass
+from typing import Callable, List, Optional, Tuple
+
+import numpy as np
+
+from .. import _core
+from ..mesh.mesh import Mesh
+
+Projector = Callable[[np.ndarray, np.ndarray], np.ndarray]
+
+# Bytes per fine node of a whole solve (fine matrix in the solver and in Python, coarse matrices,
+# prolongations, meshes, work vectors, results), by cell type: the peak resident memory of a Python
+# solve that keeps its hierarchy (release_hierarchy off), measured at stop 21 on Hertz triangles /
+# quadrilaterals level 8 and sphere tetrahedra / hexahedra level 4 (909 / 891 / 2,065 / 3,181 B a
+# node with the interpreter's ~70 MB), times 1.5 for what a problem of another shape holds more.
+# It was 2,200 in 2D and 14,000 in 3D, 4.5x the measured 3D peak: it refused tetrahedral level 5
+# (8.1M dofs, about 6 GB) on a 24 GB machine.
+# Plus the interpreter, numpy, matplotlib's import and the core: _BASE_BYTES.
+_BYTES_PER_NODE = {"triangle": 1400, "quad": 1400, "tetra": 3200, "hexahedron": 4800}
+_BASE_BYTES = 150 * 2**20
+
+
+def bytes_per_node(mesh: Mesh) -> int:
+    """The memory estimate's bytes per fine node for this mesh's cell type."""
+    return _BYTES_PER_NODE[mesh.cell_type]
+
+
+@dataclass
+class Transfer:
+    """Nodal interpolation from one level to the next: fine node i is the sum of
+    weight[k] * coarse node parent[k] for k in ptr[i]:ptr[i+1]."""
+
+    n_fine: int
+    n_coarse: int
+    ptr: np.ndarray
+    parent: np.ndarray
+    weight: np.ndarray
+
+    def as_tuple(self) -> Tuple:
+        return (self.n_fine, self.n_coarse, self.ptr, self.parent, self.weight)
+
+    def matrix(self):
+        """The scalar interpolation matrix as a dense-free scipy.sparse CSR (for tests and users)."""
+        import scipy.sparse as sp
+
+        return sp.csr_matrix((self.weight, self.parent, self.ptr), shape=(self.n_fine, self.n_coarse))
+
+
+def available_memory_bytes() -> int:
+    try:
+        with open("/proc/meminfo") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    return int(os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES"))
+
+
+def _unique_count(cells: np.ndarray, local) -> int:
+    sub = np.sort(cells[:, np.array(local)].reshape(-1, len(local[0])), axis=1)
+    return len(np.unique(sub, axis=0))
+
+
+def estimate_nodes(mesh: Mesh, levels: int) -> int:
+    """Nodes of the finest level after levels - 1 uniform refinements (exact)."""
+    k = mesh.cells.shape[1]
+    n, m = mesh.num_points, mesh.num_cells
+    if mesh.dim == 2:
+        e = np.sort(np.stack([mesh.cells, np.roll(mesh.cells, -1, axis=1)], -1).reshape(-1, 2), axis=1)
+        e = len(np.unique(e, axis=0))
+        for _ in range(levels - 1):
+            if k == 3:
+                n, e, m = n + e, 2 * e + 3 * m, 4 * m
+            else:
+                n, e, m = n + e + m, 2 * e + 4 * m, 4 * m
+        return int(n)
+    if k == 4:  # tetrahedra (red): a face gets 3 inner edges, a cell 1 edge (the diagonal) and 8 faces
+        e = _unique_count(mesh.cells, [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)])
+        f = _unique_count(mesh.cells, [(0, 1, 2), (0, 1, 3), (0, 2, 3), (1, 2, 3)])
+        for _ in range(levels - 1):
+            n, e, f, m = n + e, 2 * e + 3 * f + m, 4 * f + 8 * m, 8 * m
+    else:  # hexahedra: a face gets a centre and 4 half edges, a cell a centre, 6 edges and 12 faces
+        e = _unique_count(mesh.cells, [(0, 1), (1, 2), (2, 3), (3, 0), (4, 5), (5, 6), (6, 7), (7, 4),
+                                       (0, 4), (1, 5), (2, 6), (3, 7)])
+        f = _unique_count(mesh.cells, [(0, 3, 2, 1), (4, 5, 6, 7), (0, 1, 5, 4), (1, 2, 6, 5), (2, 3, 7, 6), (3, 0, 4, 7)])
+        for _ in range(levels - 1):
+            n, e, f, m = n + e + f + m, 2 * e + 4 * f + 6 * m, 4 * f + 12 * m, 8 * m
+    return int(n)
+
+
+def estimate_memory_bytes(mesh: Mesh, levels: int) -> int:
+    """Peak resident bytes a solve on `levels` uniform levels of `mesh` is estimated to need."""
+    return _BASE_BYTES + estimate_nodes(mesh, levels) * bytes_per_node(mesh)
+
+
+class MeshHierarchy:
+    """Meshes from coarse (index 0) to fine and the transfers between consecutive levels.
+
+    A hierarchy made by `build` can give up its coarse meshes and all its transfers
+    (release_coarse) once a core solver holds its own copies of what it needs: the finest mesh
+    stays (results and output need it), and `meshes` / `transfers` are made again from the coarse
+    mesh, the same refinement and projection (bit for bit) the next time they are asked for. At
+    level 9 in 2D they were 66 bytes a dof of a solve's peak (issue 15)."""
+
+    def __init__(self, meshes: List[Mesh], transfers: Optional[List[Transfer]] = None, build_seconds: float = 0.0,
+                 kind: str = "uniform", estimated_error: Optional[List[float]] = None,
+                 bisection_marks: Optional[np.ndarray] = None):
+        self._meshes: Optional[List[Mesh]] = meshes
+        self._transfers: Optional[List[Transfer]] = [] if transfers is None else transfers
+        self.build_seconds = build_seconds
+        self.kind = kind
+        # adaptive hierarchies: the estimated error (hierarchical estimator, energy norm) of the solution
+        # on each level, coarse to fine
+        self.estimated_error: List[float] = [] if estimated_error is None else estimated_error
+        # adaptive tetrahedral hierarchies: the bisection state of the finest mesh's cells (the marks of
+        # _core.bisect), so that a further level continues the same bisection tree
+        self.bisection_marks = bisection_marks
+        # build(): (coarse mesh, projector) to make the levels again after release_coarse
+        self._recipe: Optional[Tuple[Mesh, Optional[Projector]]] = None
+        self._finest: Optional[Mesh] = None  # the finest mesh while the others are released
+        self._levels = 0
+
+    def __setstate__(self, state: dict) -> None:
+        # a hierarchy pickled when this was a dataclass (benchmarks/cycle_growth.py caches one)
+        if "meshes" in state:
+            state["_meshes"], state["_transfers"] = state.pop("meshes"), state.pop("transfers")
+        for key, default in (("_recipe", None), ("_finest", None), ("_levels", 0), ("bisection_marks", None)):
+            state.setdefault(key, default)
+        self.__dict__.update(state)
+
+    def __repr__(self) -> str:
+        state = ", coarse levels released" if self.released else ""
+        return f"MeshHierarchy({self.kind}, {self.levels} levels, {self.finest.num_points} fine nodes{state})"
+
+    @property
+    def meshes(self) -> List[Mesh]:
+        if self._meshes is None:
+            self._restore()
+        return self._meshes
+
+    @meshes.setter
+    def meshes(self, value: List[Mesh]) -> None:
+        self._meshes, self._finest, self._recipe = value, None, None
+
+    @property
+    def transfers(self) -> List[Transfer]:
+        if self._transfers is None:
+            self._restore()
+        return self._transfers
+
+    @transfers.setter
+    def transfers(self, value: List[Transfer]) -> None:
+        if self._meshes is None:
+            self._restore()
+        self._transfers = value
+        self._recipe = None  # no longer what build() made
+
+    @property
+    def released(self) -> bool:
+        """Are the coarse meshes and the transfers released (made again when asked for)?"""
+        return self._meshes is None
+
+    def can_release(self) -> bool:
+        """A hierarchy of build() (uniform refinement) can make its levels again; an adaptive one
+        (its marks came from solves) or one assembled by hand cannot."""
+        return self._recipe is not None
+
+    def release_coarse(self) -> bool:
+        """Drop the coarse meshes and the transfers, keep the finest mesh (the same object). They
+        are made again, bit for bit, when `meshes` or `transfers` is next read. Returns whether
+        they were released (False for a hierarchy that cannot make them again: can_release)."""
+        if self._recipe is None:
+            return False
+        if self._meshes is not None:
+            self._levels = len(self._meshes)
+            self._finest = self._meshes[-1]
+            self._meshes, self._transfers = None, None
+        return True
+
+    def _restore(self) -> None:
+        coarse, projector = self._recipe
+        meshes, transfers = _refine_uniformly(coarse, self._levels, projector)
+        fine = meshes[-1]
+        if not (np.array_equal(fine.points, self._finest.points) and np.array_equal(fine.cells, self._finest.cells)):
+            raise RuntimeError("the released hierarchy was not made again identically")  # pragma: no cover
+        meshes[-1] = self._finest  # the object the problem and its results hold
+        self._meshes, self._transfers, self._finest = meshes, transfers, None
+
+    def memory_bytes(self) -> dict:
+        """Bytes of the arrays this hierarchy holds now: {"meshes": ..., "transfers": ...} (the
+        finest mesh alone, no transfers, while released). Reads nothing back."""
+        def nb(*arrays):
+            return int(sum(a.nbytes for a in arrays if isinstance(a, np.ndarray)))
+
+        meshes = [self._finest] if self._meshes is None else self._meshes
+        return {"meshes": sum(nb(m.points, m.cells, m.facets, m.facet_tags) for m in meshes),
+                "transfers": sum(nb(t.ptr, t.parent, t.weight) for t in (self._transfers or []))}
+
+    @property
+    def finest(self) -> Mesh:
+        return self._finest if self._meshes is None else self._meshes[-1]
+
+    @property
+    def levels(self) -> int:
+        return self._levels if self._meshes is None else len(self._meshes)
+
+    @classmethod
+    def build(cls, mesh: Mesh, levels: int, projector: Optional[Projector] = None,
+              memory_fraction: float = 0.8) -> "MeshHierarchy":
+        """Refine `mesh` uniformly until there are `levels` levels in all (level 1 is `mesh`).
+        New nodes on boundary facets are passed through `projector(points, tags)` so that they land
+        on a curved boundary. Raises MemoryError before allocating if the estimate does not fit."""
+        if isinstance(levels, bool) or not isinstance(levels, (int, np.integer)):
+            raise TypeError(f"levels must be an integer, got {type(levels).__name__}")
+        if levels < 1:
+            raise ValueError(f"levels must be at least 1, got {levels}")
+        t0 = time.perf_counter()
+        need = estimate_memory_bytes(mesh, levels)
+        have = available_memory_bytes()
+        if need > memory_fraction * have:
+            raise MemoryError(
+                f"{levels} levels need about {need / 2**30:.1f} GiB ({estimate_nodes(mesh, levels):,} nodes), "
+                f"more than {memory_fraction:.0%} of the {have / 2**30:.1f} GiB available")
+        _core.check_cells(mesh.points, mesh.cells, mesh.cell_type)
+        h = cls(*_refine_uniformly(mesh, levels, projector), time.perf_counter() - t0)
+        h._recipe = (mesh, projector)
+        return h
+
+    def truncated(self, levels: int) -> "MeshHierarchy":
+        """The first `levels` levels (coarse to fine) of this hierarchy, sharing its meshes."""
+        if isinstance(levels, bool) or not isinstance(levels, (int, np.integer)) or not 1 <= levels <= self.levels:
+            raise ValueError(f"levels must lie in 1..{self.levels}, got {levels!r}")
+        return MeshHierarchy(self.meshes[:levels], self.transfers[:levels - 1], self.build_seconds, self.kind,
+                             self.estimated_error[:levels],
+                             self.bisection_marks if levels == self.levels else None)
+
+    def thinned(self, min_growth: float = 2.0) -> "MeshHierarchy":
+        """The same finest and coarsest meshes with the levels in between kept only where the
+        node count has grown by at least `min_growth` since the last kept level (transfers
+        composed: still nested, the fine nodes interpolated from the kept coarse ones). A strongly
+        graded hierarchy (small Doerfler theta, growth 1.2-1.5 per level) becomes one with
+        geometric growth, so that a cycle over it costs O(n_L) even with full smoothing."""
+        if isinstance(min_growth, bool) or not isinstance(min_growth, (int, float)) or not min_growth >= 1:
+            raise ValueError(f"min_growth must be a number >= 1, got {min_growth!r}")
+        keep = [0]
+        for k in range(1, self.levels):
+            if k == self.levels - 1 or self.meshes[k].num_points >= min_growth * self.meshes[keep[-1]].num_points:
+                keep.append(k)
+        transfers = []
+        for a, b in zip(keep[:-1], keep[1:]):
+            P = self.transfers[a].matrix()
+            for t in self.transfers[a + 1:b]:
+                P = t.matrix() @ P
+            P = P.tocsr()
+            P.sort_indices()
+            transfers.append(Transfer(P.shape[0], P.shape[1], P.indptr.astype(np.int64), P.indices.astype(np.int64),
+                                      P.data.astype(float)))
+        est = [self.estimated_error[k] for k in keep if k < len(self.estimated_error)]
+        return MeshHierarchy([self.meshes[k] for k in keep], transfers, self.build_seconds, self.kind, est)
+
+    def new_nodes(self, level: int) -> np.ndarray:
+        """Nodes that level `level` (an index into meshes; 0 is the coarse mesh) adds to the one below."""
+        self._check_level(level)
+        start = 0 if level == 0 else self.meshes[level - 1].num_points
+        return np.arange(start, self.meshes[level].num_points, dtype=np.int64)
+
+    def changed_nodes(self, level: int) -> np.ndarray:
+        """Nodes whose hat functions on level `level` differ from the level below: the new nodes and
+        their neighbours (every node of a cell that has a new node). Level 0 changes every node.
+        Local smoothing needs only these rows on an adaptive hierarchy (a cycle costs O(n_L))."""
+        self._check_level(level)
+        if level == 0:
+            return np.arange(self.meshes[0].num_points, dtype=np.int64)
+        cells = self.meshes[level].cells
+        n_below = self.meshes[level - 1].num_points
+        touched = cells[np.any(cells >= n_below, axis=1)]
+        return np.unique(touched).astype(np.int64)
+
+    def _check_level(self, level):
+        if isinstance(level, bool) or not isinstance(level, (int, np.integer)) or not 0 <= level < self.levels:
+            raise ValueError(f"level must be an index 0..{self.levels - 1}, got {level!r}")
+
+
+def longest_edge_first(points: np.ndarray, cells: np.ndarray) -> np.ndarray:
+    """Triangles rotated (orientation kept) so that their longest edge joins the first two
+    vertices: the refinement edge of newest-vertex bisection. Ties go to the first edge."""
+    X = points[cells]
+    length = np.linalg.norm(X[:, [1, 2, 0]] - X, axis=2)  # edge a joins vertices a and a+1
+    best = np.argmax(length >= length.max(axis=1, keepdims=True) * (1 - 1e-12), axis=1)
+    return np.ascontiguousarray(np.take_along_axis(cells, (best[:, None] + np.arange(3)) % 3, axis=1))
+
+
+def _refine_uniformly(mesh: Mesh, levels: int, projector: Optional[Projector]) -> Tuple[List[Mesh], List[Transfer]]:
+    """`mesh` and levels - 1 uniform refinements of it, with the transfers between them."""
+    meshes, transfers = [mesh], []
+    for _ in range(levels - 1):
+        m = meshes[-1]
+        fine, t = _refined(m, _core.refine(m.points, m.cells, m.cell_type, m.facets, m.facet_tags), projector)
+        meshes.append(fine)
+        transfers.append(t)
+    return meshes, transfers
+
+
+def index_dtype(largest: int):
+    """int32 for node, cell and entry ids up to `largest` that fit (half the bytes of int64: the
+    cells of a refined mesh and the transfers' pointers and parents), int64 otherwise."""
+    return np.int32 if largest < 2 ** 31 - 1 else np.int64
+
+
+def _refined(m: Mesh, r: dict, projector: Optional[Projector]) -> Tuple[Mesh, Transfer]:
+    """The fine mesh and transfer of a refinement result of the core, boundary nodes projected."""
+    points = r["points"]
+    nb = r["boundary_nodes"]
+    if projector is not None and len(nb):
+        moved = np.asarray(projector(points[nb], r["boundary_tags"]), dtype=float)
+        if moved.shape != (len(nb), m.dim):
+            raise ValueError(f"the boundary projector returned shape {moved.shape}, expected {(len(nb), m.dim)}")
+        points[nb] = moved
+    _core.check_cells(points, r["cells"], m.cell_type)
+    # 32-bit ids where they fit (issue 15): the core reads any integer array (a 64-bit copy while it
+    # works on it, none kept); the Python side keeps half the bytes
+    ids = index_dtype(len(points))
+    fine = Mesh._trusted(points, r["cells"].astype(ids), m.cell_type, r["facets"].astype(ids), r["facet_tags"])
+    ptr = r["ptr"].astype(index_dtype(int(r["ptr"][-1])))
+    return fine, Transfer(fine.num_points, m.num_points, ptr, r["parent"].astype(index_dtype(m.num_points)), r["weight"])
+
+
+def _node_cells(cells: np.ndarray, n: int) -> Tuple[np.ndarray, np.ndarray]:
+    """CSR of the cells around each node: cells ptr[i]:ptr[i+1] of `order` hold node i."""
+    flat = cells.ravel()
+    order = np.argsort(flat, kind="stable") // cells.shape[1]
+    ptr = np.zeros(n + 1, dtype=np.int64)
+    np.cumsum(np.bincount(flat, minlength=n), out=ptr[1:])
+    return ptr, order
+
+
+def boundary_interpolation(coarse: Mesh, fine_points: np.ndarray, t: Transfer, tol: float = 1e-12) -> Transfer:
+    """The transfer `t` with the rows of moved nodes (fine nodes not at the weighted mean of their
+    parents: new boundary nodes projected onto a curved boundary) replaced by the coarse P1
+    function evaluated at the node's actual position: its barycentric coordinates in the coarse
+    simplex that holds all its parents (of several, the one the point lies least outside of).
+    Why: with the refinement weights (1/2, 1/2) the prolongation of a linear field (a rigid
+    rotation, a constant strain) is not that field at a projected node, so the coarse spaces miss
+    exactly the smooth modes multigrid relies on them for; with barycentric weights P reproduces
+    every linear field on every level. A projected node lies outside its coarse cell on a convex
+    boundary: one weight is negative (about -h / (8 R)), so P is no averaging map there
+    (bound_restriction.hpp scales by the row's sum of |weights|, which covers it).
+    Not used by default: it was the suspected cause of the cycle growth on the Hertz hierarchies,
+    and measured it is not (linear rates the same to 0.005 in 2D and 3D, Algorithm 2 the same or up
+    to 4 cycles worse: the negative weights tighten the restricted obstacles; docs/history/adaptive.md, issue 11,
+    third part, benchmarks/cycle_growth.py). Kept for that comparison and for meshes whose
+    projection moves nodes by more than h^2 / (8 R)."""
+    if coarse.cell_type not in ("triangle", "tetra"):
+        raise ValueError(f"boundary interpolation is for simplices, got {coarse.cell_type}")
+    d = coarse.dim
+    P = t.matrix()
+    moved = np.flatnonzero(np.linalg.norm(fine_points - P @ coarse.points, axis=1) >
+                           tol * max(1.0, float(np.abs(coarse.points).max())))
+    if not len(moved):
+        return t
+    nptr, ncells = _node_cells(coarse.cells, coarse.num_points)
+    count = np.diff(t.ptr)
+    new_count = count.copy()
+    new_rows = {}
+    for i in moved:
+        sl = slice(t.ptr[i], t.ptr[i + 1])
+        par = t.parent[sl][t.weight[sl] != 0]
+        cand = ncells[nptr[par[0]]:nptr[par[0] + 1]]
+        cand = cand[[bool(np.all(np.isin(par, coarse.cells[c]))) for c in cand]]
+        if not len(cand):
+            raise ValueError(f"fine node {i}: no coarse cell holds all its parents {par.tolist()}")
+        X = coarse.points[coarse.cells[cand]]                      # (k, d+1, d)
+        J = np.transpose(X[:, 1:] - X[:, :1], (0, 2, 1))           # (k, d, d)
+        lam = np.linalg.solve(J, (fine_points[i] - X[:, 0])[:, :, None])[:, :, 0]
+        bary = np.concatenate([1 - lam.sum(axis=1, keepdims=True), lam], axis=1)
+        best = int(np.argmax(bary.min(axis=1)))
+        new_rows[int(i)] = (coarse.cells[cand[best]], bary[best])
+        new_count[i] = d + 1
+    ptr = np.zeros(t.n_fine + 1, dtype=np.int64)
+    np.cumsum(new_count, out=ptr[1:])
+    keep = np.ones(t.n_fine, dtype=bool)
+    keep[moved] = False
+    src = np.repeat(keep, count)
+    dst = np.repeat(keep, new_count)
+    parent = np.empty(ptr[-1], dtype=np.int64)
+    weight = np.empty(ptr[-1], dtype=float)
+    parent[dst], weight[dst] = t.parent[src], t.weight[src]
+    for i, (p, w) in new_rows.items():
+        parent[ptr[i]:ptr[i + 1]], weight[ptr[i]:ptr[i + 1]] = p, w
+    return Transfer(t.n_fine, t.n_coarse, ptr, parent, weight)

@@ -1,0 +1,96 @@
+"""Independent check of a computed contact state against the discrete conditions (DESIGN section 2).
+
+The solvers stop when ||u^{k+1} - u^k||_A <= tol. That test cannot tell a solution from an iterate
+that the cycle maps back onto itself without solving anything (e.g. a smoother that flips a few
+contact nodes back and forth with an even number of sweeps per cycle). This module recomputes the
+residual r = A u - f from the displacement alone and measures every force condition relative to the
+force scale of the problem and the penetration relative to its displacement scale, so a "converged"
+result can be confirmed or rejected.
+"""
+from __future__ import annotations
+
+from typing import Dict
+
+import numpy as np
+
+from ..model.frames import to_local
+
+# A solve that met its stopping test but violates the conditions by more than this (relative) did
+# not find a solution.
+VIOLATION_TOL = 1e-6
+
+
+def contact_conditions(problem, result) -> Dict[str, float]:
+    """Relative violations of the discrete contact conditions by `result` (a ContactResult of
+    `problem`), each >= 0, plus "max", their maximum:
+
+    - interior: max |(A u - f)| over the free dofs off the contact boundary,
+    - inactive_force: max |s_n| over contact nodes off the obstacle (u_n < g), and |s_T| there
+      unless friction acts there (Tresca),
+    - tension: max (A u - f)_{p,n} over nodes in contact (must be <= 0),
+    - friction_bound: max (|s_T| - s_p) where friction acts (Coulomb: nodes in contact, s_p =
+      F_p |s_n|; Tresca: every contact node, the given bound; frictionless: nodes in contact, 0),
+    - slip_direction: max |s_T + s_p u_T/|u_T|| over the nodes where friction acts and u_T != 0,
+    all divided by the force scale (the largest contact force, support reaction or load; the
+    stiffness scale max|A| max|u| for a body that carries no force); and penetration: max (u_n - g)
+    divided by the displacement scale of the problem (the largest displacement, prescribed
+    displacement or gap; it does not vanish when every gap and normal displacement is zero). The
+    contact state is recomputed from u (u_n >= g in contact, u_T == 0 sticking, both up to
+    round-off), not taken from the result; the frames are the result's (result.contact_frames)."""
+    c = problem.contact
+    u = np.asarray(result.displacement)
+    r = problem.A.matvec(u) - problem.load
+    Q = result.contact_frames
+    ul = to_local(Q, u[c.nodes])
+    sl = to_local(Q, r[c.nodes])
+    # a tangential component fixed by a Dirichlet condition takes no part in friction: its force is a reaction
+    if len(c.nodes):
+        tied = problem.solver.frame_fixed.astype(bool)
+        ul[tied], sl[tied] = 0.0, 0.0
+    # Forces are measured against the force scale of the problem: the largest contact force, support
+    # reaction or load. A body that carries no force at all (pushed onto nothing, it only translates)
+    # has none; there the stiffness scale max|A| max|u| measures what round-off is.
+    fixed = problem.fixed.astype(bool)
+    scale = max(float(np.abs(sl[:, 0]).max(initial=0.0)), float(np.abs(r[fixed]).max(initial=0.0)),
+                float(np.abs(problem.load).max(initial=0.0)))
+    stiffness = float(np.abs(problem.A.data).max(initial=0.0)) * float(np.abs(u).max(initial=0.0))
+    if scale <= 1e-9 * stiffness:
+        scale = stiffness
+    scale = max(scale, 1e-300)
+    free = ~fixed
+    free[c.nodes] = False
+    out = {"interior": float(np.abs(r[free]).max(initial=0.0)) / scale}
+    # The core's tests u_n == g and u_T == 0 are exact in its frames; rebuilt here from the canonical
+    # u through a rotated frame they carry round-off, hence the relative tolerance.
+    eps = 1e-12 * max(float(np.abs(u).max(initial=0.0)), float(np.abs(c.gaps).max(initial=0.0)), 1e-300)
+    active = ul[:, 0] >= c.gaps - eps
+    ut = np.linalg.norm(ul[:, 1:], axis=1)
+    ut[ut <= eps] = 0.0
+    st = np.linalg.norm(sl[:, 1:], axis=1)
+    law = problem.law
+    # Where friction acts: Coulomb at nodes in contact (bound F |s_n|); Tresca at every contact node,
+    # touching or not (its bound is given, DESIGN section 4); frictionless nowhere.
+    if law == "coulomb":
+        s, rubs = problem.coefficients * np.abs(sl[:, 0]), active
+    elif law == "tresca":
+        s, rubs = problem.coefficients, np.ones(len(c.nodes), bool)
+    else:
+        s, rubs = np.zeros(len(c.nodes)), active
+    off = ~active
+    out["inactive_force"] = max(float(np.abs(sl[off, 0]).max(initial=0.0)),
+                                float(st[off & ~rubs].max(initial=0.0))) / scale
+    out["tension"] = max(0.0, float(sl[active, 0].max(initial=0.0))) / scale
+    out["friction_bound"] = max(0.0, float((st - s)[rubs].max(initial=0.0))) / scale
+    slide = rubs & (ut > 0)
+    if np.any(slide):
+        dev = sl[slide, 1:] + s[slide, None] * ul[slide, 1:] / ut[slide, None]
+        out["slip_direction"] = float(np.linalg.norm(dev, axis=1).max()) / scale
+    else:
+        out["slip_direction"] = 0.0
+    # Not max |u_n|: on a tilted plane with zero gaps every u_n is round-off. The displacement scale
+    # of a loaded body is positive: it moves, or is held by prescribed displacements, or its gaps are.
+    disp = max(float(np.abs(u).max(initial=0.0)), float(np.abs(problem.fixed_values).max(initial=0.0)),
+               float(np.abs(c.gaps).max(initial=0.0)), 1e-300)
+    out["penetration"] = max(0.0, float((ul[:, 0] - c.gaps).max(initial=0.0))) / disp
+    out["max"] = max(out.values())
+    return out
