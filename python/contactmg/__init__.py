@@ -14,10 +14,14 @@ from .mesh.io import read_mesh, to_meshio, write_mesh
 from .model.material import Material
 from .mesh.mesh import Mesh
 from .model.obstacle import NodalObstacle, PlaneObstacle
-from .solve.contact_problem import ContactBoundary, ContactProblem, CycleOptions, Dirichlet
+from .model.problem import Body, ContactBoundary, ContactPair, Dirichlet, Problem
+from .solve.options import SolverOptions, resolve_options
+from .solve.solver import Solver
+from .solve.loadpath import LoadPath, PathResult
+from .solve.adaptivity import adaptive_hierarchy
+from .solve.contact_problem import ContactProblem, MultiBodyProblem, TwoBodyProblem
 from .results.result import ContactResult
 
-# 3D (issue 10)
 from .mesh.generators_3d import (BALL_SURFACE, BALL_TOP, CORK_BOTTOM, CORK_SIDE, CORK_TOP, CylinderProjector,  # noqa: E402
                             SphereProjector, ball_projector, box, cylinder, half_ball)
 from .model.obstacle import RevolutionObstacle, SphereObstacle  # noqa: E402
@@ -27,7 +31,8 @@ __version__ = "0.1.0"
 __all__ = ["Coulomb", "Frictionless", "Tresca", "contact_frames", "HERTZ_ARC", "HERTZ_TOP", "RECT_BOTTOM",
            "RECT_LEFT", "RECT_RIGHT", "RECT_TOP", "CircleProjector", "hertz_half_disk", "hertz_projector",
            "rectangle", "MeshHierarchy", "Transfer", "read_mesh", "to_meshio", "write_mesh", "Material", "Mesh",
-           "NodalObstacle", "PlaneObstacle", "ContactBoundary", "ContactProblem", "CycleOptions", "Dirichlet",
-           "ContactResult",
+           "NodalObstacle", "PlaneObstacle", "ContactBoundary", "Problem", "Body", "ContactPair", "Dirichlet",
+           "Solver", "SolverOptions", "resolve_options", "LoadPath", "PathResult", "adaptive_hierarchy",
+           "ContactProblem", "MultiBodyProblem", "TwoBodyProblem", "ContactResult",
            "BALL_SURFACE", "BALL_TOP", "CORK_BOTTOM", "CORK_SIDE", "CORK_TOP", "CylinderProjector", "SphereProjector",
            "ball_projector", "box", "cylinder", "half_ball", "RevolutionObstacle", "SphereObstacle"]

@@ -14,7 +14,7 @@ from contactmg.model.mortar_3d import (clip_polygons, element_dual_coefficients,
                                  shape)
 from contactmg.solve.contact_problem import Dirichlet
 from contactmg.results.result import SLIP, STICK
-from contactmg.solve.multibody import Body, ContactPair, TwoBodyProblem
+from contactmg import Body, ContactPair, TwoBodyProblem
 
 MAT = Material(1000.0, 0.3)
 BOTTOM, TOP = 5, 6  # box tags of z = 0 and z = lz

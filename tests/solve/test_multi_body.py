@@ -10,7 +10,7 @@ from contactmg.mesh.hierarchy import MeshHierarchy
 from contactmg.model.material import Material
 from contactmg.solve.contact_problem import Dirichlet
 from contactmg.results.result import SLIP
-from contactmg.solve.multibody import Body, ContactPair, MultiBodyProblem, TwoBodyProblem
+from contactmg import Body, ContactPair, MultiBodyProblem, TwoBodyProblem
 
 MAT = Material(1000.0, 0.3)
 

@@ -17,7 +17,7 @@ from contactmg.model.material import Material
 from contactmg.model.mortar import mortar_coupling_2d
 from contactmg.solve.contact_problem import Dirichlet
 from contactmg.results.result import SLIP
-from contactmg.solve.multibody import Body, ContactPair, TwoBodyProblem
+from contactmg import Body, ContactPair, TwoBodyProblem
 
 MAT = Material(1000.0, 0.3)
 

@@ -19,7 +19,7 @@ from ..model.material import Material
 from ..mesh.mesh import Mesh
 from ..solve.contact_problem import Dirichlet
 if TYPE_CHECKING:
-    from ..solve.multibody import TwoBodyProblem
+    from ..solve.contact_problem import TwoBodyProblem
 # two_body (scipy.sparse, the mortar modules) is imported where a problem is built: the command line
 # builds this module's parser for every command, and scipy cost a `contactmg hertz` process 32 MiB (issue 15)
 
@@ -47,7 +47,8 @@ def cylinders_problem(levels: int = 5, friction: float = 0.4, E2: float = E, nu2
                       tied_correction: bool = True) -> TwoBodyProblem:
     if isinstance(friction, bool) or not isinstance(friction, (int, float)) or not math.isfinite(friction) or friction < 0:
         raise ValueError(f"the friction coefficient must be a finite number >= 0, got {friction!r}")
-    from ..solve.multibody import Body, ContactPair, TwoBodyProblem
+    from ..model.problem import Body, ContactPair
+    from ..solve.contact_problem import TwoBodyProblem
 
     upper = MeshHierarchy.build(polar_half_disk((0.0, 0.4), RADIUS, rings=3, segments=upper_segments), levels,
                                 projector=hertz_projector((0.0, 0.4), RADIUS))

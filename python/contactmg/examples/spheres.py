@@ -21,7 +21,7 @@ from ..model.material import Material
 from ..mesh.mesh import Mesh
 from ..solve.contact_problem import Dirichlet
 if TYPE_CHECKING:
-    from ..solve.multibody import TwoBodyProblem
+    from ..solve.contact_problem import TwoBodyProblem
 # two_body (scipy.sparse, the mortar modules) is imported where a problem is built: the command line
 # builds this module's parser for every command, and scipy cost a `contactmg hertz` process 32 MiB (issue 15)
 
@@ -72,7 +72,8 @@ def spheres_problem(cell: str = "hexahedron", levels: int = DEFAULT_LEVELS, fric
         raise ValueError(f"the displacement D must lie in (0, {0.25 * RADIUS}) (small deformations), got {displacement!r}")
     if cell not in ("tetra", "hexahedron"):
         raise ValueError(f"cell must be 'tetra' or 'hexahedron', got {cell!r}")
-    from ..solve.multibody import Body, ContactPair, TwoBodyProblem
+    from ..model.problem import Body, ContactPair
+    from ..solve.contact_problem import TwoBodyProblem
 
     upper = MeshHierarchy.build(half_ball(cell, UPPER_CENTER, RADIUS, k=upper_k, inner=UPPER_INNER), levels,
                                 projector=SphereProjector(UPPER_CENTER, RADIUS, (BALL_SURFACE,)))

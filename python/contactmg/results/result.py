@@ -57,6 +57,8 @@ class ContactResult:
     contact_facets: Optional[np.ndarray] = None
     # "hertz" for the Hertz benchmark, whose zones are centred on x = 0 (contact_halfwidth)
     benchmark: Optional[str] = None
+    # the solver options the solve used, every problem-dependent default resolved (field -> value)
+    options: Optional[Dict] = None
 
     def __post_init__(self):
         if self.contact_frames is None:

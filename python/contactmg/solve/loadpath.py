@@ -1,7 +1,7 @@
-"""Quasi-static load paths (DESIGN section 12, issue 12).
+"""Quasi-static load paths.
 
 A load path is a sequence of load steps k = 1..K, each with its Dirichlet values and its load (body
-force and Neumann tractions), on one ContactProblem (body, mesh hierarchy, contact boundary, law:
+force and Neumann tractions), on one Problem (body, mesh hierarchy, contact boundary, law:
 the description; the path only changes the data). Step k is solved with the incremental friction
 law -- friction acts on the slip increment u_T - u^{k-1}_T, "stick" means no slip in this step --
 starting from u^{k-1} (warm start). The one-step path from u^0 = 0 is the problem's own solve.
@@ -13,15 +13,15 @@ Anything not given keeps the problem's own data. LoadPath.proportional scales th
 Dirichlet values and load by t_k (normal loading in equal increments)."""
 from __future__ import annotations
 
-import numbers
 import time
 from dataclasses import dataclass, field
 from typing import Callable, List, Optional, Sequence
 
 import numpy as np
 
-from ..solve.contact_problem import INT32_MAX, METHODS, ContactProblem, Dirichlet, \
-    assemble_load, dirichlet_arrays
+from ..model.problem import Dirichlet, Problem, assemble_load, dirichlet_arrays
+from .options import INT32_MAX, METHODS, options_from
+from .solver import Solver
 from ..results.result import SLIP, STICK, ContactResult
 
 PATH_METHODS = ("nmg", "fixed-point")
@@ -52,10 +52,10 @@ class LoadPath:
     module docstring. `initial`: the displacement the path starts from (None: u = 0, the reference
     configuration), also the slip origin of its first step."""
 
-    def __init__(self, problem: ContactProblem, parameters: Sequence[float], dirichlet=None, body_force=None,
+    def __init__(self, problem: Problem, parameters: Sequence[float], dirichlet=None, body_force=None,
                  traction=None, initial: Optional[np.ndarray] = None):
-        if not isinstance(problem, ContactProblem):
-            raise TypeError("a load path needs a ContactProblem")
+        if not isinstance(problem, Problem):
+            raise TypeError("a load path needs a Problem")
         try:
             params = [float(t) for t in parameters]
         except (TypeError, ValueError):
@@ -80,7 +80,7 @@ class LoadPath:
         self._scale = None  # set by proportional()
 
     @classmethod
-    def proportional(cls, problem: ContactProblem, steps: int, start: float = 0.0, end: float = 1.0) -> "LoadPath":
+    def proportional(cls, problem: Problem, steps: int, start: float = 0.0, end: float = 1.0) -> "LoadPath":
         """The problem's Dirichlet values and load scaled by t_k = start + (end - start) k / steps,
         k = 1..steps: loading in equal increments to the problem's own data at t = 1."""
         if isinstance(steps, (bool, np.bool_)) or not isinstance(steps, (int, np.integer)) or not 1 <= steps <= INT32_MAX:
@@ -117,15 +117,16 @@ class LoadPath:
             load = assemble_load(p.mesh, bf, tr)
         return StepData(t, values, load)
 
-    def solve(self, method: str = "nmg", tol: float = 1e-11, max_cycles: int = 200, warm_start: bool = True,
-              cycle: Optional[str] = None, nu1: Optional[int] = None, nu2: Optional[int] = None,
-              stop_on_failure: bool = True, progress: Optional[Callable[[int, ContactResult], None]] = None
-              ) -> "PathResult":
+    def solve(self, method: str = "nmg", options=None, *, warm_start: bool = True, stop_on_failure: bool = True,
+              progress: Optional[Callable[[int, ContactResult], None]] = None, **option_fields) -> "PathResult":
         """Solve every step by `method` ("nmg": Algorithm 2, "fixed-point": Algorithm 1) with the
-        incremental law from the previous step's solution; warm_start=False starts every step
-        from u = 0 instead (same problem, same slip origin: the reference for the cycle savings).
-        A step that does not converge ends the path (stop_on_failure) -- later steps would start
-        from a state that is not a solution; the result says so (converged False)."""
+        incremental law from the previous step's solution, all on one Solver (one core, one
+        hierarchy: each step sets its load, Dirichlet values and slip origin). `options` (a
+        SolverOptions or a dict) and `option_fields` (tol, max_cycles, cycle, nu1, nu2, ...) as in
+        problem.solve. warm_start=False starts every step from u = 0 instead (same problem, same slip
+        origin: the reference for the cycle savings). A step that does not converge ends the path
+        (stop_on_failure) -- later steps would start from a state that is not a solution; the result
+        says so (converged False). `progress(step, result)` is called after every step."""
         if method not in PATH_METHODS:
             raise ValueError(f"a load path is solved by one of {PATH_METHODS}, got {method!r}"
                              + (" (the linear cost reference has no load path)" if method in METHODS else ""))
@@ -134,32 +135,21 @@ class LoadPath:
             raise ValueError("a load path needs a contact boundary (without contact the problem is linear: scale the solution)")
         if method == "fixed-point" and p.friction.law != "coulomb":
             raise ValueError("the fixed-point method (Algorithm 1) needs Coulomb friction")
-        if isinstance(tol, (bool, np.bool_)) or not (isinstance(tol, numbers.Real) and np.isfinite(tol) and tol > 0):
-            raise ValueError(f"tol must be a finite number > 0, got {tol!r}")
-        if isinstance(max_cycles, (bool, np.bool_)) or not isinstance(max_cycles, (int, np.integer)) \
-                or not 1 <= max_cycles <= INT32_MAX:
-            raise ValueError(f"max_cycles must be an integer in 1..{INT32_MAX}, got {max_cycles!r}")
-        options = p._options(cycle, nu1, nu2)
-        kw = dict(tol=float(tol), max_cycles=int(max_cycles), method=method, cycle=options.cycle, nu1=options.nu1,
-                  nu2=options.nu2, omega=p.smoothing_omega())
-        # the problem's own choices, as in its single solves (a one-step path is one solve, bit for bit)
-        if p.post_smoothing_omega() is not None:
-            kw["omega_post"] = p.post_smoothing_omega()
-        kw.update(p.cycle_switches(method))
+        base = options_from(getattr(p, "default_options", None) if options is None else options)
+        opts = base.replace(method=method, **option_fields)
+        if progress is not None and not callable(progress):
+            raise ValueError(f"progress must be a callable of (step, result), got {progress!r}")
         t_path = time.perf_counter()
+        solver = Solver(p, opts)
         steps: List[ContactResult] = []
         previous = self.initial
+        zero = np.zeros((p.mesh.num_points, p.mesh.dim))
         for k in range(len(self)):
             data = self.step_data(k)
-            t0 = time.perf_counter()
-            core = p._new_core_solver(p.law, options, load=data.load, fixed_values=data.fixed_values)
-            p._apply_local_smoothing(core)  # as the problem's own solver (adaptive hierarchies)
-            if previous is not None:
-                core.set_slip_origin(previous)
-            build = time.perf_counter() - t0
-            raw = core.solve(previous if warm_start else None, kw)
-            res = ContactResult.from_raw(p, raw, method)
-            res.setup_seconds = p.assembly_seconds + build  # hierarchy, assembly and this step's core build
+            res = solver.solve(previous if warm_start else None, load=data.load, fixed_values=data.fixed_values,
+                               slip_origin=zero if previous is None else previous)
+            build = solver.build_seconds if k == 0 else 0.0
+            res.setup_seconds = p.assembly_seconds + build  # hierarchy, assembly and the core's build (step 1)
             res.extra.update(step=k + 1, parameter=data.parameter, build_seconds=build,
                              slip_increment=self._slip_increment(res, previous))
             steps.append(res)
@@ -241,7 +231,7 @@ class PathResult:
         return pd
 
 
-def two_phase_path(problem: ContactProblem, tags, first, steps: int, second=None, second_steps: int = 0,
+def two_phase_path(problem: Problem, tags, first, steps: int, second=None, second_steps: int = 0,
                    others: Sequence[Dirichlet] = ()) -> LoadPath:
     """Dirichlet values on the facets `tags` moved from 0 to the vector `first` in `steps` equal
     increments (t_k = k / steps), then by a further `second` in `second_steps` increments

@@ -1,0 +1,626 @@
+"""The description of a contact problem: N >= 1 elastic bodies (mesh hierarchy, material, Dirichlet
+data, loads), the rigid obstacle of a body's contact facets, the body-to-body contact pairs and the
+friction law. Assembled once; no solver lives here (see contactmg.solve.solver.Solver).
+
+Several bodies are coupled through the dual mortar basis transformation of Wohlmuth & Krause (2003).
+The bodies are assembled one by one into a block-diagonal A. Each contact pair couples the nonmortar
+boundary of one body with the mortar boundary of another (mortar.py). The change of basis u = T w,
+T = I + N (N = D^{-1} M on the nonmortar contact rows and mortar columns of every pair), makes the
+nonmortar unknowns the relative displacements w_p = u_p - (D^{-1} M u_m)_p, and the coupled
+conditions nodal: the core then solves T^T A T, T^T f with its own nodal solvers, truncation and
+monotone multigrid, in the nodal frames of the nonmortar normals. T^{-1} = I - N (N^2 = 0: no node is
+both nonmortar and mortar), so the fine prolongation T^{-1} P is again a scalar interpolation, and
+each body keeps its own coarse levels, coupled only through the transformed fine level. The friction
+law acts on the tangential part of w: the relative tangential displacement.
+"""
+from __future__ import annotations
+
+import numbers
+import time
+import warnings
+from dataclasses import dataclass
+from typing import Callable, Dict, List, Optional, Sequence, Union
+
+import numpy as np
+import scipy.sparse as sp
+
+from .. import _core
+from ..mesh.hierarchy import MeshHierarchy, Transfer
+from ..mesh.mesh import Mesh, connected_components
+from .frames import contact_frames
+from .friction import Coulomb, Frictionless, Tresca
+from .material import Material
+from .mortar import MortarCoupling, mortar_coupling_2d
+from .mortar_3d import mortar_coupling_3d
+
+VectorField = Union[Sequence[float], np.ndarray, Callable[[np.ndarray], np.ndarray]]
+
+def tag_tuple(tags, name: str) -> tuple:
+    """Facet tags as a tuple of ints: one integer, or a sequence of integers."""
+    if isinstance(tags, (bool, np.bool_)) or isinstance(tags, (str, bytes)):
+        raise TypeError(f"{name} must be an integer tag or a sequence of integer tags, got {tags!r}")
+    if isinstance(tags, (int, np.integer)):
+        return (int(tags),)
+    try:
+        items = list(tags)
+    except TypeError:
+        raise TypeError(f"{name} must be an integer tag or a sequence of integer tags, got {tags!r}") from None
+    out = []
+    for t in items:
+        if isinstance(t, (bool, np.bool_)) or not isinstance(t, (int, np.integer)):
+            raise TypeError(f"{name} must hold integer tags, got {t!r}")
+        out.append(int(t))
+    return tuple(out)
+
+
+@dataclass(frozen=True)
+class Dirichlet:
+    """Prescribed displacement on the nodes of the boundary facets with the given tags (one
+    integer or a sequence): a constant vector (a component given as None stays free) or a callable
+    x (m, d) -> (m, d) values, which fixes every component."""
+
+    tags: Sequence[int]
+    value: Union[Sequence[Optional[float]], Callable[[np.ndarray], np.ndarray]]
+
+    def __post_init__(self):
+        object.__setattr__(self, "tags", tag_tuple(self.tags, "Dirichlet tags"))
+
+
+@dataclass
+class ContactBoundary:
+    """Contact nodes of the finest mesh (ascending node id) with their outward normals, gaps,
+    lumped boundary measure (integral of the hat function over the contact boundary), frames
+    (nc, d, d; columns n, t(, s)) and the contact facets they come from."""
+
+    nodes: np.ndarray
+    normals: np.ndarray
+    gaps: np.ndarray
+    measure: np.ndarray
+    frames: Optional[np.ndarray] = None
+    facets: Optional[np.ndarray] = None
+
+    def __post_init__(self):
+        if self.frames is None:
+            self.frames = contact_frames(self.normals)
+
+
+def _field(value: Optional[VectorField], x: np.ndarray, name: str) -> np.ndarray:
+    d = x.shape[1]
+    if value is None:
+        return np.zeros((len(x), d))
+    v = value(x) if callable(value) else np.broadcast_to(np.asarray(value, dtype=float), (len(x), d))
+    v = np.asarray(v, dtype=float)
+    if v.shape != (len(x), d):
+        raise ValueError(f"{name} must give {d} components per point, got shape {v.shape}")
+    if not np.all(np.isfinite(v)):
+        raise ValueError(f"{name} has non-finite values")
+    return np.ascontiguousarray(v)
+
+
+def assemble_load(mesh, body_force: Optional[VectorField] = None,
+                  traction: Optional[Dict[int, VectorField]] = None) -> np.ndarray:
+    """The nodal load (n, d): body force and Neumann tractions on tagged facets (a load path
+    assembles one per step)."""
+    load = _core.assemble_mass_load(mesh.points, mesh.cells, mesh.cell_type, _field(body_force, mesh.points, "body_force"))
+    for tag, value in (traction or {}).items():
+        (tag,) = tag_tuple(tag, "a traction tag")
+        sel = mesh.facet_tags == tag
+        if not np.any(sel):
+            raise ValueError(f"no boundary facet carries the traction tag {tag}")
+        load += _core.assemble_facet_load(mesh.points, mesh.facets[sel], _field(value, mesh.points, f"traction[{tag}]"))
+    return load
+
+
+def dirichlet_arrays(mesh, dirichlet: Sequence[Dirichlet]):
+    """(fixed (n, d) uint8, fixed_values (n, d)) of a sequence of Dirichlet conditions."""
+    d, n = mesh.dim, mesh.num_points
+    fixed = np.zeros((n, d), dtype=np.uint8)
+    values = np.zeros((n, d))
+    for bc in dirichlet:
+        nodes = mesh.boundary_nodes(bc.tags)
+        if len(nodes) == 0:
+            raise ValueError(f"no boundary facet carries the Dirichlet tags {list(bc.tags)}")
+        if callable(bc.value):
+            fixed[nodes] = 1
+            values[nodes] = _field(bc.value, mesh.points[nodes], "Dirichlet value")
+            continue
+        if len(bc.value) != d:
+            raise ValueError(f"a Dirichlet value needs {d} components (None for free), got {len(bc.value)}")
+        for a, v in enumerate(bc.value):
+            if v is not None:
+                if isinstance(v, (bool, np.bool_)) or not isinstance(v, numbers.Real) or not np.isfinite(v):
+                    raise ValueError(f"Dirichlet values must be finite numbers (None for free), got {v!r}")
+                fixed[nodes, a] = 1
+                values[nodes, a] = v
+    return fixed, values
+
+
+
+
+@dataclass
+class Body:
+    """One elastic body: its mesh hierarchy, material, Dirichlet data (a sequence of Dirichlet),
+    the facet tags that may touch the problem's rigid obstacle (`contact_tags`), a body force and
+    Neumann tractions ({tag: vector or callable(x)})."""
+
+    hierarchy: MeshHierarchy
+    material: Material
+    dirichlet: Sequence[Dirichlet] = ()
+    contact_tags: Sequence[int] = ()
+    body_force: Optional[VectorField] = None
+    traction: Optional[Dict[int, VectorField]] = None
+
+    def __post_init__(self):
+        if not isinstance(self.hierarchy, MeshHierarchy):
+            raise TypeError("hierarchy must be a MeshHierarchy")
+        if not isinstance(self.material, Material):
+            raise TypeError("material must be a Material")
+        dirichlet = [self.dirichlet] if isinstance(self.dirichlet, Dirichlet) else list(self.dirichlet)
+        for bc in dirichlet:
+            if not isinstance(bc, Dirichlet):
+                raise TypeError(f"dirichlet must be a sequence of Dirichlet(tags, value), got a {type(bc).__name__}")
+            if not callable(bc.value) and (np.ndim(bc.value) != 1 or isinstance(bc.value, (str, bytes))):
+                raise TypeError("a Dirichlet value must be a vector (None for a free component) or a callable, "
+                                f"got {bc.value!r}")
+        self.dirichlet = dirichlet
+        self.contact_tags = tag_tuple(self.contact_tags, "contact_tags")
+
+
+@dataclass
+class ContactPair:
+    """Body `nonmortar` (the slave side, carrying the multiplier) against body `mortar` (the master
+    side), on the facets with the given tags; `region(midpoints) -> bool` restricts the nonmortar
+    facets (the possible contact zone); `search`: how far along its normal a nonmortar point looks
+    for the mortar boundary."""
+
+    nonmortar: int
+    mortar: int
+    nonmortar_tags: Sequence[int]
+    mortar_tags: Sequence[int]
+    search: float
+    region: Optional[Callable[[np.ndarray], np.ndarray]] = None
+
+
+class Problem:
+    """Linear elasticity of one or more bodies with contact and friction: the description.
+
+    `bodies`: one Body or a sequence of them. One body: contact on its `contact_tags` facets against
+    the rigid `obstacle` (without contact tags: a linear elasticity problem). Several bodies: contact
+    through the mortar `pairs` (ContactPair); the displacement of results is the canonical u = T w on
+    the union mesh (`mesh`, `body_id` per node), the contact quantities those of the nonmortar nodes
+    of all pairs (`pair_of_contact[c]`: the pair of contact node c). `friction`: Frictionless() (the
+    default), Tresca(bound) or Coulomb(F). `tied_correction` (several bodies): after each coarse
+    correction of "nmg" and "fixed-point", a second one without bounds in the space where every
+    contact dof is frozen: it moves touching bodies together (0009-tied-correction).
+
+    Read-only facts: mesh, bodies, hierarchy, material, contact, friction, law, coefficients, load,
+    fixed, fixed_values, transfers, rotated_frames(). Solving: contactmg.Solver(problem, options), or
+    problem.solve(...) (installed by contactmg.solve, see there)."""
+
+    def __init__(self, bodies, obstacle=None, friction=None, pairs=None, tied_correction: bool = True):
+        t0 = time.perf_counter()
+        single = isinstance(bodies, Body)
+        bodies = [bodies] if single else bodies
+        try:
+            bodies = list(bodies)
+        except TypeError:
+            raise TypeError(f"bodies must be a Body or a sequence of Body, got {type(bodies).__name__}") from None
+        if not bodies or not all(isinstance(b, Body) for b in bodies):
+            raise TypeError("bodies must be a Body or a non-empty sequence of Body")
+        friction = Frictionless() if friction is None else friction
+        if not isinstance(friction, (Frictionless, Tresca, Coulomb)):
+            raise TypeError("friction must be Frictionless(), Tresca(bound) or Coulomb(F)")
+        if not isinstance(tied_correction, (bool, np.bool_)):
+            raise TypeError(f"tied_correction must be True or False, got {tied_correction!r}")
+        self.bodies, self.friction = bodies, friction
+        self.benchmark: Optional[str] = None  # "hertz" for the Hertz benchmark (its zones are centred on x = 0)
+        if len(bodies) == 1:
+            if pairs:
+                raise ValueError("pairs couple two bodies of the problem: give several bodies")
+            self.pairs: List[ContactPair] = []
+            self.tied_correction = False
+            self._init_one(bodies[0], obstacle)
+        else:
+            if obstacle is not None:
+                raise ValueError("an obstacle acts on one body: several bodies touch each other through pairs")
+            if any(len(b.contact_tags) for b in bodies):
+                raise ValueError("contact_tags name a body's facets against the obstacle: several bodies touch each "
+                                 "other through pairs")
+            self.tied_correction = bool(tied_correction)
+            self._init_many(bodies, pairs)
+        self.assembly_seconds = time.perf_counter() - t0 + sum(b.hierarchy.build_seconds for b in bodies)
+
+    # -- one body ---------------------------------------------------------------------------------
+    def _init_one(self, b: Body, obstacle) -> None:
+        if len(b.contact_tags) and obstacle is None:
+            raise ValueError("contact_tags are given but no obstacle")
+        if obstacle is not None and not callable(getattr(obstacle, "gaps_and_normals", None)):
+            raise TypeError("obstacle must be a PlaneObstacle, a NodalObstacle or an object with "
+                            f"gaps_and_normals(points), got {type(obstacle).__name__}")
+        self.hierarchy, self.material, self.obstacle = b.hierarchy, b.material, obstacle
+        mesh = self.mesh = b.hierarchy.finest
+        self._A = _core.assemble_elasticity(mesh.points, mesh.cells, mesh.cell_type, b.material.E, b.material.nu)
+        self.load = assemble_load(mesh, b.body_force, b.traction)
+        self.fixed, self.fixed_values = dirichlet_arrays(mesh, b.dirichlet)
+        # how to make load and fixed_values again once released (a value set from outside is kept:
+        # the setters clear these)
+        self._load_recipe, self._values_recipe = (b.body_force, b.traction), list(b.dirichlet)
+        self._check_rigid_motion()
+        self.contact = self._contact_boundary(b.contact_tags, obstacle)
+        self.coefficients = friction_coefficients(self.friction, self.contact)
+        self.body_id = np.zeros(mesh.num_points, np.int32)
+        self.transfers = list(b.hierarchy.transfers)
+
+    # -- several bodies ---------------------------------------------------------------------------
+    def _init_many(self, bodies: List[Body], pairs) -> None:
+        if pairs is None:
+            raise TypeError("several bodies need pairs: a ContactPair or a non-empty sequence of ContactPair")
+        pairs = [pairs] if isinstance(pairs, ContactPair) else list(pairs)
+        if not pairs or not all(isinstance(q, ContactPair) for q in pairs):
+            raise TypeError("pairs must be a ContactPair or a non-empty sequence of ContactPair")
+        for q in pairs:
+            if q.nonmortar == q.mortar or not all(0 <= k < len(bodies) for k in (q.nonmortar, q.mortar)):
+                raise ValueError("a contact pair needs two different bodies of the problem")
+        levels = {b.hierarchy.levels for b in bodies}
+        if len(levels) != 1:
+            raise ValueError(f"the bodies' hierarchies need the same number of levels, got {sorted(levels)}")
+        dims = {b.hierarchy.finest.dim for b in bodies}
+        if len(dims) != 1:
+            raise ValueError(f"the bodies need one dimension, got {sorted(dims)}")
+        self.pairs, self.obstacle = pairs, None
+        # each body on its own: assembly, Dirichlet data, its rigid motions held (no contact relied on)
+        self.parts = [Problem(Body(b.hierarchy, b.material, b.dirichlet, body_force=b.body_force,
+                                   traction=b.traction)) for b in bodies]
+        d = dims.pop()
+        sizes = [p.mesh.num_points for p in self.parts]
+        self.offsets = np.r_[0, np.cumsum(sizes)].astype(np.int64)
+        n = int(self.offsets[-1])
+        self.mesh = _union_mesh([p.mesh for p in self.parts], self.offsets)
+        self.body_id = np.repeat(np.arange(len(bodies)), sizes).astype(np.int32)
+        self.hierarchy = bodies[pairs[0].nonmortar].hierarchy  # for reports (kind, levels)
+        self.material = bodies[pairs[0].nonmortar].material
+        fine = self._level_coupling(levels.pop() - 1, [p.fixed.any(axis=1) for p in self.parts])
+        self.couplings = fine["couplings"]
+        self.N = fine["N"]
+        Tk = sp.kron(sp.identity(n) + self.N, sp.identity(d), format="csr")
+        self.A_canonical = sp.block_diag([_bsr(p.A, p.mesh.num_points, d) for p in self.parts], format="csr")
+        self.load_canonical = np.vstack([p.load for p in self.parts])
+        self._Tk = Tk
+        self._A = self._assemble_matrix()
+        self.load = (Tk.T @ self.load_canonical.ravel()).reshape(n, d)
+        self.fixed = np.vstack([p.fixed for p in self.parts])
+        self.fixed_values = np.vstack([p.fixed_values for p in self.parts])
+        order = np.argsort(fine["nodes"], kind="stable")  # contact nodes ascending
+        nodes, normals = fine["nodes"][order], np.ascontiguousarray(fine["normals"][order])
+        measure, gaps = fine["measure"][order], np.ascontiguousarray(fine["gaps"][order])
+        self.pair_of_contact = fine["pair"][order]
+        self.contact = ContactBoundary(nodes.astype(np.int64), normals, gaps, measure,
+                                       facets=np.ascontiguousarray(fine["facets"]), frames=contact_frames(normals))
+        self.coefficients = friction_coefficients(self.friction, self.contact)
+        self.transfers = self._transfers()
+
+    @property
+    def multibody(self) -> bool:
+        """Does the problem couple several bodies (through mortar pairs)?"""
+        return len(self.bodies) > 1
+
+    @property
+    def pair(self) -> ContactPair:
+        """The first (for two bodies: the only) contact pair."""
+        return self.pairs[0]
+
+    @property
+    def coupling(self) -> MortarCoupling:
+        """The fine mortar coupling of the first pair."""
+        return self.couplings[0]
+
+    def _check_rigid_motion(self):
+        """The Dirichlet dofs must pin every rigid-body motion of every connected piece of the body
+        (no contact relied on): a piece that floats free makes the problem singular."""
+        mesh = self.mesh
+        x, d = mesh.points, mesh.dim
+        fixed = self.fixed.astype(bool)
+        count, label = self._pieces()
+        order = np.argsort(label, kind="stable")
+        bounds = np.searchsorted(label[order], np.arange(count + 1))
+        for k in range(count):
+            nodes = np.sort(order[bounds[k]:bounds[k + 1]])
+            if _holds_rigid_motion(x[nodes], fixed[nodes]):
+                continue
+            where = "" if count == 1 else (
+                f" of piece {k + 1} of the {count} disconnected pieces of the mesh ({len(nodes)} nodes, "
+                f"node {int(nodes[0])} at {np.round(x[nodes[0]], 6).tolist()})")
+            raise ValueError(f"the Dirichlet conditions leave rigid-body motion{where} free: "
+                             "fix enough displacement components to hold " + ("the body" if count == 1 else "every piece"))
+
+    def _pieces(self):
+        """(count, label) of the connected pieces of the finest mesh, found on the coarsest mesh
+        (refinement splits cells and joins nothing) and handed down through the transfers: a
+        fine node lies in the piece of its first coarse parent."""
+        h = self.hierarchy
+        coarse = h.meshes[0]
+        count, label = connected_components(coarse.cells, coarse.num_points)
+        for t in h.transfers:
+            if np.any(np.diff(t.ptr) < 1):  # a node without parents: count on the fine mesh itself
+                return connected_components(self.mesh.cells, self.mesh.num_points)
+            label = label[t.parent[t.ptr[:-1]]]
+        return count, label
+
+    def _contact_boundary(self, tags, obstacle) -> ContactBoundary:
+        mesh, d = self.mesh, self.mesh.dim
+        if not len(tags):
+            return ContactBoundary(np.zeros(0, np.int64), np.zeros((0, d)), np.zeros(0), np.zeros(0),
+                                   facets=np.zeros((0, mesh.facets.shape[1]), np.int64))
+        sel = np.isin(mesh.facet_tags, list(tags))
+        if not np.any(sel):
+            raise ValueError(f"no boundary facet carries the contact tags {list(tags)}")
+        facets = mesh.facets[sel]
+        nodes = np.unique(facets)
+        # Dirichlet wins where it fixes every component (e.g. the ends of the Hertz arc on the clamped top edge)
+        nodes = nodes[~self.fixed[nodes].all(axis=1)]
+        at_nodes = getattr(obstacle, "gaps_and_normals_at", None)
+        x = mesh.points[nodes]
+        gaps, normals = at_nodes(nodes, x) if callable(at_nodes) else obstacle.gaps_and_normals(x)
+        gaps, normals = np.asarray(gaps, dtype=float), np.asarray(normals, dtype=float)
+        if gaps.shape != (len(nodes),) or normals.shape != (len(nodes), d):
+            raise ValueError(f"the obstacle gave gaps of shape {gaps.shape} and normals of shape {normals.shape} "
+                             f"for {len(nodes)} contact nodes")
+        if not (np.all(np.isfinite(gaps)) and np.all(np.isfinite(normals))):
+            raise ValueError("the obstacle gave non-finite gaps or normals")
+        # A node with some fixed components keeps its contact condition in the free directions; one
+        # whose normal component is prescribed is no contact node (the core checks it is admissible
+        # and refuses a fixed component that is neither normal nor tangential)
+        classify = _core.classify_contact_dirichlet_2D if d == 2 else _core.classify_contact_dirichlet_3D
+        keep = classify(nodes.astype(np.int64), self.fixed[nodes], self.fixed_values[nodes],
+                        np.ascontiguousarray(normals), np.ascontiguousarray(gaps)) < 2
+        nodes, gaps, normals = nodes[keep], gaps[keep], normals[keep]
+        if len(nodes) == 0:
+            raise ValueError(f"the contact boundary is empty: every node of the facets tagged {list(tags)} is fixed by "
+                             "Dirichlet data (are the contact tags the Dirichlet tags?)")
+        if np.all(gaps < 0):
+            warnings.warn(f"every contact node starts inside the obstacle (gaps from {gaps.min():.3g} to {gaps.max():.3g}): "
+                          "is the obstacle normal flipped? It must point from the body into the obstacle", UserWarning,
+                          stacklevel=3)
+        ones = np.ones((mesh.num_points, 1))
+        measure = _core.assemble_facet_load(mesh.points, facets, ones)[nodes, 0]
+        normals = np.ascontiguousarray(normals)
+        return ContactBoundary(nodes.astype(np.int64), normals, np.ascontiguousarray(gaps), measure,
+                               facets=np.ascontiguousarray(facets),
+                               frames=contact_frames(normals, self.fixed[nodes]))
+
+    def _nonmortar_facet_mask(self, pair: ContactPair, m: Mesh) -> np.ndarray:
+        sel = np.isin(m.facet_tags, list(tag_tuple(pair.nonmortar_tags, "nonmortar_tags")))
+        if pair.region is not None:
+            sel &= np.asarray(pair.region(m.points[m.facets].mean(axis=1)), dtype=bool)
+        if not np.any(sel):
+            raise ValueError(f"no facet of body {pair.nonmortar} carries the nonmortar tags "
+                             f"{list(pair.nonmortar_tags)} (in the region)")
+        return sel
+
+    def _level_coupling(self, level: int, held: Sequence[np.ndarray]) -> dict:
+        """The pairs' dual mortar couplings on the meshes of `level`: N_l (union numbering of that
+        level) and, per kept nonmortar node, its union id, normal, gap, measure D and pair.
+        A nonmortar node is kept where the mortar side covers the support of its dual basis
+        function and no Dirichlet data (`held[body]`, per node of the body's mesh) holds it."""
+        meshes = [b.hierarchy.meshes[level] for b in self.bodies]
+        offsets = np.r_[0, np.cumsum([m.num_points for m in meshes])].astype(np.int64)
+        n = int(offsets[-1])
+        rows, cols, vals = [], [], []
+        out = {k: [] for k in ("nodes", "normals", "gaps", "measure", "pair", "facets")}
+        couplings = []
+        for k, q in enumerate(self.pairs):
+            sm, mm = meshes[q.nonmortar], meshes[q.mortar]
+            msel = np.isin(mm.facet_tags, list(tag_tuple(q.mortar_tags, "mortar_tags")))
+            if not np.any(msel):
+                raise ValueError(f"no facet of body {q.mortar} carries the mortar tags {list(q.mortar_tags)}")
+            ssel = self._nonmortar_facet_mask(q, sm)
+            c = (mortar_coupling_2d if sm.dim == 2 else mortar_coupling_3d)(sm.points, sm.facets[ssel], mm.points, mm.facets[msel], q.search)
+            couplings.append(c)
+            keep = c.covered & ~held[q.nonmortar][c.nonmortar_nodes]
+            if not np.any(keep):
+                raise ValueError(f"no nonmortar node of contact pair {k} sees the mortar boundary within the search "
+                                 "distance (or every one is held by Dirichlet data)")
+            Mhat = c.Mhat[keep].tocoo()
+            nodes = c.nonmortar_nodes[keep] + offsets[q.nonmortar]
+            rows.append(nodes[Mhat.row])
+            cols.append(Mhat.col + offsets[q.mortar])
+            vals.append(Mhat.data)
+            out["nodes"].append(nodes)
+            out["normals"].append(c.normals[keep])
+            out["gaps"].append(c.gaps(sm.points, mm.points)[keep])
+            out["measure"].append(c.D[keep])
+            out["pair"].append(np.full(len(nodes), k, np.int32))
+            out["facets"].append(sm.facets[ssel] + offsets[q.nonmortar])
+        res = {key: np.concatenate(v) for key, v in out.items()}
+        if len(np.unique(res["nodes"])) != len(res["nodes"]):
+            raise ValueError("a node is a nonmortar node of two contact pairs (pairs must not share nonmortar nodes)")
+        N = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(n, n))
+        N.sum_duplicates()
+        N.eliminate_zeros()
+        # T^{-1} = I - N needs N^2 = 0: no mortar node of one pair is a nonmortar node of another
+        if (abs(N) @ abs(N)).nnz:
+            raise ValueError("a mortar node of one contact pair is a nonmortar node of another: make that body the "
+                             "nonmortar (or the mortar) side of both its pairs")
+        res["N"], res["couplings"] = N, couplings
+        return res
+
+    def _transfers(self):
+        """Per level the union of the bodies' interpolations; on the finest, T^{-1} P = (I - N) P."""
+        levels = self.bodies[0].hierarchy.levels
+        out = []
+        for l in range(levels - 1):
+            P = sp.block_diag([b.hierarchy.transfers[l].matrix() for b in self.bodies], format="csr")
+            if l == levels - 2:
+                P = (sp.identity(P.shape[0]) - self.N) @ P
+            out.append(_scalar_transfer(P))
+        return out
+
+    def _assemble_matrix(self):
+        """The matrix of the problem's unknowns: one body's stiffness, or T^T A T of the bodies'
+        block-diagonal stiffness."""
+        if self.multibody:
+            return _block_matrix((self._Tk.T @ self.A_canonical @ self._Tk).tocsr(), self.mesh.dim)
+        m = self.mesh
+        return _core.assemble_elasticity(m.points, m.cells, m.cell_type, self.material.E, self.material.nu)
+
+    def to_canonical(self, w: np.ndarray) -> np.ndarray:
+        """The displacement u = T w of the problem's unknowns w (one body: w itself)."""
+        return w + self.N @ w if self.multibody else w
+
+    def relative_displacement(self, u: np.ndarray) -> np.ndarray:
+        """w = T^{-1} u = u - N u: at a nonmortar node its displacement relative to the mortar side's
+        (D^{-1} M u_m); elsewhere u itself."""
+        return u - self.N @ u if self.multibody else u
+
+    # The load and the Dirichlet values (n, d): held until a solver has its own copies
+    # (release_vectors), then made again from the description when asked for (the same bits: the
+    # same assembly and the same Dirichlet data).
+    _load: Optional[np.ndarray] = None
+    _fixed_values: Optional[np.ndarray] = None
+    _load_recipe = None
+    _values_recipe = None
+
+    @property
+    def load(self) -> np.ndarray:
+        """The nodal load (n, d) of the problem's unknowns."""
+        if self._load is None and self._load_recipe is not None:
+            self._load = assemble_load(self.mesh, *self._load_recipe)
+        return self._load
+
+    @load.setter
+    def load(self, value: np.ndarray) -> None:
+        self._load, self._load_recipe = value, None
+
+    @property
+    def fixed_values(self) -> np.ndarray:
+        """The prescribed displacements (n, d) of the fixed components (`fixed`)."""
+        if self._fixed_values is None and self._values_recipe is not None:
+            self._fixed_values = dirichlet_arrays(self.mesh, self._values_recipe)[1]
+        return self._fixed_values
+
+    @fixed_values.setter
+    def fixed_values(self, value: np.ndarray) -> None:
+        self._fixed_values, self._values_recipe = value, None
+
+    def release_vectors(self) -> None:
+        """Drop the load and the Dirichlet values where they can be made again (see load): a solver
+        that holds its own copies frees the memory (0011-memory-release)."""
+        if self._load_recipe is not None:
+            self._load = None
+        if self._values_recipe is not None:
+            self._fixed_values = None
+
+    @property
+    def A(self):
+        """The stiffness matrix of the problem's unknowns (no boundary conditions). A solver may take
+        it over (take_matrix); asking for it again assembles it anew."""
+        if self._A is None:
+            self._A = self._assemble_matrix()
+        return self._A
+
+    def take_matrix(self):
+        """Hand the assembled matrix over to a solver that keeps it (one fine matrix in memory): one
+        body's matrix is released here (`A` assembles it again when asked); the transformed matrix
+        of several bodies stays (checks and reports multiply with it). Returns (matrix, taken)."""
+        if self.multibody:
+            return self.A, False
+        A, self._A = self.A, None
+        return A, True
+
+    @property
+    def setup_seconds(self) -> float:
+        """Hierarchy and assembly time (a solver adds its build)."""
+        return self.assembly_seconds
+
+    @property
+    def law(self) -> str:
+        """The contact law the core solves: "linear" without contact nodes, else the friction's."""
+        return "linear" if len(self.contact.nodes) == 0 else self.friction.law
+
+    def rotated_frames(self) -> bool:
+        """Is some contact frame not a signed permutation of the axes?"""
+        if self.law == "linear" or len(self.contact.nodes) == 0:
+            return False
+        a = np.abs(np.asarray(self.contact.frames, float))
+        return bool(np.any(np.minimum(a, np.abs(a - 1.0)) > 1e-12))
+
+    def adaptive_2d(self) -> bool:
+        """Is the hierarchy adaptive and the mesh two-dimensional?"""
+        return self.hierarchy.kind == "adaptive" and self.mesh.dim == 2
+
+    def coarse_levels_match_meshes(self) -> bool:
+        """Are the unknowns of every coarse level the nodes of the hierarchy's mesh of that level
+        (not so for several bodies, whose levels are unions)?"""
+        return not self.multibody
+
+    def vector_bytes(self) -> int:
+        """Bytes of the problem's vectors now held (load, Dirichlet data, contact boundary, coefficients)."""
+        c = self.contact
+        arrays = (self._load, self.fixed, self._fixed_values, self.coefficients, c.nodes, c.normals, c.gaps, c.measure,
+                  c.frames, c.facets)
+        return int(sum(a.nbytes for a in arrays if isinstance(a, np.ndarray)))
+
+    def matrix_bytes(self) -> int:
+        """Bytes of an assembled matrix held here (0 once a solver took it over)."""
+        return self._A.memory_bytes() if self._A is not None else 0
+
+    def write_vtu(self, path, result) -> None:
+        """One VTU file of `result` on the problem's mesh, with a body_id field for several bodies."""
+        from ..mesh.io import write_mesh
+
+        data = result.point_data()
+        if self.multibody:
+            data["body_id"] = self.body_id
+        write_mesh(path, self.mesh, point_data=data)
+
+
+def _holds_rigid_motion(x: np.ndarray, fixed: np.ndarray) -> bool:
+    """Do the fixed components `fixed` (m, d) of the nodes at `x` (m, d) pin every rigid motion?"""
+    d = x.shape[1]
+    if not fixed.any():
+        return False
+    x = x - x.mean(axis=0)
+    modes = [np.eye(d)[a][None, :].repeat(len(x), 0) for a in range(d)]
+    pairs = [(0, 1)] if d == 2 else [(0, 1), (1, 2), (0, 2)]
+    for i, j in pairs:
+        r = np.zeros_like(x)
+        r[:, i], r[:, j] = -x[:, j], x[:, i]
+        modes.append(r)
+    R = np.stack([m[fixed] for m in modes], axis=1)
+    return np.linalg.matrix_rank(R, tol=1e-10 * max(1.0, np.abs(R).max())) == len(modes)
+
+
+def friction_coefficients(friction, contact: ContactBoundary) -> np.ndarray:
+    """The friction law's coefficients at the contact nodes."""
+    return friction.coefficients(contact.nodes, contact.measure)
+
+
+def _bsr(A, n: int, d: int) -> sp.bsr_matrix:
+    return sp.bsr_matrix((np.asarray(A.data), np.asarray(A.indices), np.asarray(A.indptr)), shape=(n * d, n * d))
+
+
+def _block_matrix(A: sp.spmatrix, d: int):
+    B = sp.bsr_matrix(A, blocksize=(d, d))
+    B.sort_indices()
+    cls = _core.BlockMatrix2D if d == 2 else _core.BlockMatrix3D
+    n = B.shape[0] // d
+    return cls(n, n, B.indptr.astype(np.int64), B.indices.astype(np.int64), np.ascontiguousarray(B.data))
+
+
+def _scalar_transfer(P: sp.csr_matrix) -> Transfer:
+    P = sp.csr_matrix(P)
+    P.eliminate_zeros()
+    P.sort_indices()
+    return Transfer(P.shape[0], P.shape[1], P.indptr.astype(np.int64), P.indices.astype(np.int64),
+                    P.data.astype(float))
+
+
+
+def _union_mesh(meshes: Sequence[Mesh], offsets: np.ndarray) -> Mesh:
+    cell_types = {m.cell_type for m in meshes}
+    if len(cell_types) != 1:
+        raise ValueError(f"the bodies need one cell type for one output mesh, got {sorted(cell_types)}")
+    return Mesh._trusted(np.vstack([m.points for m in meshes]),
+                         np.vstack([m.cells + o for m, o in zip(meshes, offsets)]), meshes[0].cell_type,
+                         np.vstack([m.facets + o for m, o in zip(meshes, offsets)]),
+                         np.concatenate([m.facet_tags for m in meshes]))

@@ -1,0 +1,229 @@
+"""The solver's options: one frozen dataclass mirroring the core's SolverOptions
+(cpp/solver/solver_options.hpp), validated once, and the one function that fills the defaults that
+depend on the problem."""
+from __future__ import annotations
+
+import dataclasses
+import numbers
+from dataclasses import dataclass
+from typing import Optional
+
+import numpy as np
+
+METHODS = ("nmg", "fixed-point", "linear", "tnnmg")
+CYCLES = ("V", "W", "F")
+ORDERINGS = ("coloured", "lexicographic")
+LINEAR_CORRECTIONS = ("pcg", "cycle", "coarse")
+INT32_MAX = 2 ** 31 - 1  # the core counts cycles in a C int
+
+# The default omega by cell type: symmetric over-relaxation of the simplices' block Gauss-Seidel;
+# plain Gauss-Seidel on quadrilaterals and hexahedra (0005-over-relaxation).
+DEFAULT_OMEGA = {"triangle": 1.3, "tetra": 1.3}
+# The post-smoothing's own omega on 2D adaptive hierarchies, where the Petrov-Galerkin coupling is on
+# by default (0005-over-relaxation, 0006-petrov-galerkin-coupling).
+DEFAULT_OMEGA_POST_ADAPTIVE = {"triangle": 1.5}
+# A core solver built for the coloured order stores its levels by colours (each colour a contiguous
+# range: the coloured sweep streams memory; 0003-coloured-gauss-seidel).
+DEFAULT_ORDERING = "coloured"
+
+# Options the core takes only when it is built: a solve cannot change them.
+BUILD_FIELDS = ("ordering", "local_smoothing", "release_hierarchy")
+
+
+def _is_int(v) -> bool:
+    return not isinstance(v, (bool, np.bool_)) and isinstance(v, (int, np.integer))
+
+
+def _is_real(v) -> bool:
+    return not isinstance(v, (bool, np.bool_)) and isinstance(v, numbers.Real) and bool(np.isfinite(v))
+
+
+@dataclass(frozen=True)
+class SolverOptions:
+    """Every option of a solve, validated when made (ValueError naming the field).
+
+    A field None takes the problem-dependent default that resolve_options(problem, options) fills in;
+    result.options reports the values used."""
+
+    method: str = "nmg"
+    """"nmg" (Algorithm 2 for Coulomb friction; truncated monotone multigrid for frictionless and
+    Tresca; linear multigrid without contact), "tnnmg" (truncated nonsmooth Newton multigrid),
+    "fixed-point" (Algorithm 1, Coulomb only) or "linear" (the cost reference: the linear problem with
+    the contact state of an nmg solve known in advance)."""
+    tol: float = 1e-11
+    """Stop when the correction's energy norm falls below tol."""
+    rtol: float = 0.0
+    """... or below rtol times the first correction's."""
+    max_cycles: int = 200
+    """At most this many cycles."""
+    cycle: str = "F"
+    """The multigrid cycle: "V", "W" or "F"."""
+    nu1: int = 3
+    """Pre-smoothing sweeps."""
+    nu2: int = 3
+    """Post-smoothing sweeps."""
+    omega: Optional[float] = None
+    """Over-relaxation in (0, 2) of the smoothers' unbounded block solves; None: by cell type."""
+    omega_post: Optional[float] = None
+    """The post-smoothing's own over-relaxation; None: omega, or 1.5 on 2D adaptive triangle hierarchies."""
+    threads: int = 0
+    """Threads of sweeps, products and norms (0: all cores); results are bitwise the same on any count."""
+    ordering: Optional[str] = None
+    """Gauss-Seidel order, fixed when the solver is built: "coloured" or "lexicographic" (None: coloured)."""
+    local_smoothing: Optional[bool] = None
+    """Coarse levels smooth only where they differ from the level below (fixed when the solver is
+    built); None: on for adaptive hierarchies (0004-local-smoothing)."""
+    petrov_galerkin: Optional[bool] = None
+    """Algorithm 2's Petrov-Galerkin coupling of the sliding nodes on the top coarse level; None: on for
+    2D adaptive hierarchies under Coulomb friction (0006-petrov-galerkin-coupling)."""
+    upwind_contact_sweep: Optional[bool] = None
+    """Algorithm 2's extra upwind visit of the contact nodes after each fine sweep; None: on for 2D
+    adaptive hierarchies under Coulomb friction (0007-upwind-contact-sweep)."""
+    projected_coarse_correction: Optional[bool] = None
+    """The coarse correction projected onto the gap with an exact line search; None: on where a
+    contact frame is rotated (0008-projected-coarse-correction)."""
+    fixed_point_tol: float = 1e-9
+    """Algorithm 1: the relative change of the friction bound that ends the outer iteration."""
+    fixed_point_max: int = 100
+    """Algorithm 1: at most this many outer iterations."""
+    fixed_point_stall_window: int = 0
+    """Algorithm 1: stop as not converging once the change has not fallen below the one that many
+    outer iterations before (0: run to fixed_point_max)."""
+    linear: Optional[str] = None
+    """tnnmg's linear correction: "pcg", "cycle" or "coarse" (None: the core's default)."""
+    lines: Optional[bool] = None
+    """tnnmg: line smoothing in the linear correction (None: the core's default)."""
+    release_hierarchy: bool = False
+    """Once the solver is built, release the hierarchy's coarse meshes and transfers and the problem's
+    load and Dirichlet values (made again if asked for) and the cycles' workspace after each solve:
+    the lower memory peak of single solves (0011-memory-release). Fixed when the solver is built."""
+
+    def __post_init__(self):
+        if self.method not in METHODS:
+            raise ValueError(f"method must be one of {METHODS}, got {self.method!r}")
+        if self.cycle not in CYCLES:
+            raise ValueError(f"cycle must be one of {CYCLES}, got {self.cycle!r}")
+        for name in ("nu1", "nu2"):
+            v = getattr(self, name)
+            if not _is_int(v) or not 0 <= v <= 100:
+                raise ValueError(f"{name} must be an integer in 0..100, got {v!r}")
+        if self.nu1 + self.nu2 < 1:
+            raise ValueError("nu1 + nu2 must be at least 1: a cycle needs smoothing")
+        for name in ("tol", "rtol", "fixed_point_tol"):
+            v = getattr(self, name)
+            if not _is_real(v) or v < 0:
+                raise ValueError(f"{name} must be a finite number >= 0, got {v!r}")
+        if self.tol == 0 and self.rtol == 0:
+            raise ValueError("one of tol and rtol must be positive")
+        for name in ("max_cycles", "fixed_point_max"):
+            v = getattr(self, name)
+            if not _is_int(v) or not 1 <= v <= INT32_MAX:
+                raise ValueError(f"{name} must be an integer in 1..{INT32_MAX}, got {v!r}")
+        v = self.fixed_point_stall_window
+        if not _is_int(v) or not 0 <= v <= INT32_MAX:
+            raise ValueError(f"fixed_point_stall_window must be an integer >= 0, got {v!r}")
+        if not _is_int(self.threads) or not 0 <= self.threads <= 4096:
+            raise ValueError(f"threads must be an integer in 0..4096 (0: all cores), got {self.threads!r}")
+        if self.ordering is not None and self.ordering not in ORDERINGS:
+            raise ValueError(f"ordering must be one of {ORDERINGS}, got {self.ordering!r}")
+        for name in ("omega", "omega_post"):
+            w = getattr(self, name)
+            if w is not None and not (_is_real(w) and 0 < w < 2):
+                raise ValueError(f"{name} must be a number in (0, 2), got {w!r}")
+        for name in ("local_smoothing", "petrov_galerkin", "upwind_contact_sweep", "projected_coarse_correction",
+                     "lines", "release_hierarchy"):
+            v = getattr(self, name)
+            if v is not None and not isinstance(v, (bool, np.bool_)):
+                raise ValueError(f"{name} must be True or False, got {v!r}")
+        if self.release_hierarchy is None:
+            raise ValueError("release_hierarchy must be True or False, got None")
+        if (self.linear is not None or self.lines is not None) and self.method != "tnnmg":
+            raise ValueError("linear and lines choose the linear correction of method 'tnnmg'")
+        if self.linear is not None and self.linear not in LINEAR_CORRECTIONS:
+            raise ValueError(f"linear must be one of {LINEAR_CORRECTIONS}, got {self.linear!r}")
+        if self.method not in ("nmg", "linear"):
+            for name in ("petrov_galerkin", "upwind_contact_sweep", "projected_coarse_correction"):
+                if getattr(self, name):
+                    raise ValueError(f"{name} is a choice of method 'nmg' (Algorithm 2), not {self.method!r}")
+
+    def replace(self, **changes) -> "SolverOptions":
+        """A validated copy with `changes` (field names; TypeError for an unknown one)."""
+        unknown = set(changes) - {f.name for f in dataclasses.fields(self)}
+        if unknown:
+            raise TypeError(f"unknown solver option(s): {sorted(unknown)}")
+        return dataclasses.replace(self, **changes)
+
+    def to_dict(self) -> dict:
+        """The fields as a dict."""
+        return dataclasses.asdict(self)
+
+    def to_core(self) -> dict:
+        """The core's options dict (cpp/bindings/options.cpp): the fields the core knows, those left
+        None omitted (the core's defaults), the switches of Algorithm 2 only where on and method is
+        "nmg" (the core refuses them for other methods)."""
+        out = {}
+        for f in dataclasses.fields(self):
+            v = getattr(self, f.name)
+            if f.name in ("local_smoothing", "release_hierarchy") or v is None:
+                continue
+            if f.name in ("petrov_galerkin", "upwind_contact_sweep", "projected_coarse_correction"):
+                if v and self.method == "nmg":
+                    out[f.name] = True
+                continue
+            if f.name == "fixed_point_stall_window" and not v:
+                continue
+            if f.name == "omega_post" and v == self.omega:
+                continue  # the core's own default: the post-smoothing takes omega
+            out[f.name] = bool(v) if isinstance(v, np.bool_) else v
+        if self.method == "linear":
+            out["method"] = "nmg"  # the known-state problem is linear: the core's cycles without contact
+        return out
+
+
+def options_from(options=None, **fields) -> SolverOptions:
+    """A SolverOptions from None, a SolverOptions or a dict, with `fields` set on top (TypeError for
+    an unknown field)."""
+    if options is None:
+        base = SolverOptions()
+    elif isinstance(options, SolverOptions):
+        base = options
+    elif isinstance(options, dict):
+        base = SolverOptions().replace(**options)
+    else:
+        raise TypeError(f"options must be a SolverOptions or a dict, got {type(options).__name__}")
+    return base.replace(**fields) if fields else base
+
+
+def resolve_options(problem, options=None) -> SolverOptions:
+    """`options` (None: the defaults) with every problem-dependent default (a field None) filled in
+    for `problem`: the one place these defaults are decided.
+
+    omega: DEFAULT_OMEGA of the cell type (1 where it has none); omega_post: omega where omega is
+    given, else DEFAULT_OMEGA_POST_ADAPTIVE on 2D adaptive hierarchies, else omega; petrov_galerkin
+    and upwind_contact_sweep: on for 2D adaptive hierarchies under Coulomb friction;
+    projected_coarse_correction: on where a contact frame is rotated; local_smoothing: on for
+    adaptive hierarchies; ordering: DEFAULT_ORDERING. Left None: linear and lines (the core's own)."""
+    o = options_from(options)
+    mesh = problem.mesh
+    adaptive_2d = problem.hierarchy.kind == "adaptive" and mesh.dim == 2
+    coulomb = problem.friction.law == "coulomb"
+    changes = {}
+    if o.omega_post is None:
+        post = o.omega if o.omega is not None else (DEFAULT_OMEGA_POST_ADAPTIVE.get(mesh.cell_type) if adaptive_2d else None)
+        changes["omega_post"] = post
+    if o.omega is None:
+        changes["omega"] = float(DEFAULT_OMEGA.get(mesh.cell_type, 1.0))
+    if changes.get("omega_post", o.omega_post) is None:
+        changes["omega_post"] = changes.get("omega", o.omega)
+    algorithm2 = o.method in ("nmg", "linear")
+    if o.petrov_galerkin is None:
+        changes["petrov_galerkin"] = bool(algorithm2 and adaptive_2d and coulomb)
+    if o.upwind_contact_sweep is None:
+        changes["upwind_contact_sweep"] = bool(algorithm2 and adaptive_2d and coulomb)
+    if o.projected_coarse_correction is None:
+        changes["projected_coarse_correction"] = bool(algorithm2 and problem.rotated_frames())
+    if o.local_smoothing is None:
+        changes["local_smoothing"] = problem.hierarchy.kind == "adaptive"
+    if o.ordering is None:
+        changes["ordering"] = DEFAULT_ORDERING
+    return o.replace(**changes) if changes else o

@@ -1,0 +1,191 @@
+"""The solver of a Problem: builds the core once and solves it for what changes from one load step
+to the next (load, prescribed displacements, slip origin, start value)."""
+from __future__ import annotations
+
+import time
+from typing import Callable, Optional
+
+import numpy as np
+
+from .. import _core
+from ..model.frames import to_canonical, to_local
+from ..model.problem import Problem
+from ..results.result import ContactResult
+from .options import BUILD_FIELDS, SolverOptions, options_from, resolve_options
+
+
+class Solver:
+    """The core solver of `problem` (a Problem) with `options` (a SolverOptions, a dict of its
+    fields, or None: the defaults), built once here. Options fixed at the build (ordering,
+    local_smoothing, release_hierarchy) hold for every solve; the others may change per solve."""
+
+    def __init__(self, problem: Problem, options=None):
+        if not isinstance(problem, Problem):
+            raise TypeError(f"problem must be a Problem, got {type(problem).__name__}")
+        self.problem = problem
+        self._given = options_from(options)  # as given: with_options and per-solve dicts change these
+        self.options = resolve_options(problem, self._given)
+        t0 = time.perf_counter()
+        self.core = self._build(problem.law, self.options, take_matrix=True)
+        if self.options.local_smoothing:
+            self._smooth_locally(self.core)
+        self.build_seconds = time.perf_counter() - t0
+        if self.options.release_hierarchy:
+            problem.hierarchy.release_coarse()
+            problem.release_vectors()
+            # made for one solve: the cycles' workspace need not outlive it (the lower peak)
+            self.core.keep_workspace(False)
+
+    # -- building -------------------------------------------------------------------------------
+    def _build(self, law: str, options: SolverOptions, frame_fixed=None, frame_values=None, load=None,
+               take_matrix: bool = False):
+        p, c = self.problem, self.problem.contact
+        cls = _core.ContactSolver2D if p.mesh.dim == 2 else _core.ContactSolver3D
+        build = dict(cycle=options.cycle, nu1=options.nu1, nu2=options.nu2, ordering=options.ordering)
+        A, taken = p.take_matrix() if take_matrix else (p.A, False)
+        core = cls(A, p.load if load is None else load, p.fixed, p.fixed_values, c.nodes, c.normals, c.gaps,
+                   p.coefficients, law, [t.as_tuple() for t in p.transfers], build,
+                   frame_fixed=frame_fixed, frame_values=frame_values, take_matrix=taken)
+        if p.tied_correction and law != "linear":
+            core.enable_tied_correction()
+        return core
+
+    def _smooth_locally(self, core) -> None:
+        """Coarse level l (1 <= l < finest; the coarsest is solved exactly) smooths only the nodes
+        whose hat functions differ from level l-1 (MeshHierarchy.changed_nodes): elsewhere its
+        space is the one below, whose correction the cycle computes anyway (0004-local-smoothing)."""
+        p = self.problem
+        if not p.coarse_levels_match_meshes():
+            return  # unknowns other than the mesh nodes (several bodies): keep every row
+        h = p.hierarchy
+        for level in range(1, h.levels - 1):
+            if core.level_sizes[level] != h.meshes[level].num_points:
+                return
+        for level in range(1, h.levels - 1):
+            core.set_rows_to_smooth(level, h.changed_nodes(level))
+
+    def with_options(self, **changes) -> "Solver":
+        """A solver on the same built core whose solves take these option changes (not the fields
+        fixed at the build)."""
+        fixed = [k for k in changes if k in BUILD_FIELDS and changes[k] != getattr(self.options, k)]
+        if fixed:
+            raise ValueError(f"{', '.join(fixed)} cannot change per solve: the core is built with it (make a new Solver)")
+        other = object.__new__(Solver)
+        other.__dict__.update(self.__dict__)
+        other._given = self._given.replace(**changes)
+        other.options = resolve_options(self.problem, other._given)
+        return other
+
+    def memory_bytes(self) -> int:
+        """Bytes held by the built core (matrices, prolongations, vectors)."""
+        return int(self.core.memory_bytes())
+
+    # -- solving --------------------------------------------------------------------------------
+    def solve(self, u0: Optional[np.ndarray] = None, *, load: Optional[np.ndarray] = None,
+              fixed_values: Optional[np.ndarray] = None, slip_origin: Optional[np.ndarray] = None,
+              options=None, progress: Optional[Callable[[dict], None]] = None,
+              error_reference: Optional[np.ndarray] = None) -> ContactResult:
+        """Solve from `u0` (None: zero). `load` (n, d) and `fixed_values` (n, d) replace the core's
+        (they stay for later solves: a load path's step), `slip_origin` (n, d) is the displacement
+        the incremental friction law measures slip from. `options`: a SolverOptions or a dict of
+        changes to this solver's options for this solve (not the build's fields). `progress(record)`
+        is called after every cycle with a dict (cycle, outer, correction_norm, energy, seconds,
+        error, active, stick, slip, rebuilt); an exception it raises stops the solve. With
+        `error_reference` (u*), history["error"] records ||u - u*||_A after every cycle. Method
+        "linear" solves with "nmg" first for the contact state (see solve_known_state)."""
+        opts = self._options_for(options)
+        if progress is not None and not callable(progress):
+            raise ValueError(f"progress must be a callable (called with a dict after every cycle), got {progress!r}")
+        p = self.problem
+        if opts.method == "fixed-point" and (p.friction.law != "coulomb" or p.law == "linear"):
+            raise ValueError("the fixed-point method (Algorithm 1) needs Coulomb friction on a contact boundary")
+        if load is not None:
+            self.core.set_load(np.ascontiguousarray(load, dtype=float))
+        if fixed_values is not None:
+            self.core.set_fixed_values(np.ascontiguousarray(fixed_values, dtype=float))
+        if slip_origin is not None:
+            self.core.set_slip_origin(np.ascontiguousarray(slip_origin, dtype=float))
+        if opts.method == "linear":
+            reference = self.solve(None, options=opts.replace(method="nmg"))
+            return self.solve_known_state(reference, opts, progress=progress, error_reference=error_reference)
+        raw = self.core.solve(u0, opts.to_core(), progress=progress, reference=error_reference)
+        return self._result(raw, opts, self.build_seconds)
+
+    def _options_for(self, options) -> SolverOptions:
+        if options is None:
+            return self.options
+        if isinstance(options, SolverOptions):
+            given = options
+        elif isinstance(options, dict):
+            given = self._given.replace(**options)
+        else:
+            raise TypeError(f"options must be a SolverOptions or a dict, got {type(options).__name__}")
+        opts = resolve_options(self.problem, given)
+        fixed = [k for k in BUILD_FIELDS if getattr(opts, k) != getattr(self.options, k)]
+        if fixed:
+            raise ValueError(f"{', '.join(fixed)} cannot change per solve: the core is built with it (make a new Solver)")
+        return opts
+
+    def solve_known_state(self, reference: ContactResult, options=None, progress=None,
+                          error_reference: Optional[np.ndarray] = None) -> ContactResult:
+        """The cost reference (method "linear"): the linear problem with the final contact state of
+        `reference` known (active normals fixed on the gap, sticking tangentials fixed at zero, sliding
+        nodes loaded with their friction force), started from zero on a core built for it."""
+        opts = self._options_for(options).replace(method="linear")
+        p, c = self.problem, self.problem.contact
+        d = p.mesh.dim
+        fixed, values, load = np.zeros((len(c.nodes), d), np.uint8), np.zeros((len(c.nodes), d)), p.load.copy()
+        state = reference.node_state[c.nodes]
+        active = state > 0
+        fixed[active, 0] = 1
+        values[active, 0] = c.gaps[active]
+        stick = state == 1
+        fixed[stick, 1:] = 1
+        values[stick, 1:] = 0.0
+        slip = state == 2
+        s_local = np.zeros_like(reference.contact_force)
+        s_local[slip, 1:] = reference.contact_force[slip, 1:]
+        load[c.nodes] += to_canonical(c.frames, s_local)
+        t0 = time.perf_counter()
+        core = self._build("linear", opts, fixed, values, load)
+        build = time.perf_counter() - t0
+        raw = core.solve(None, opts.to_core(), progress=progress, reference=error_reference)
+        # The core reports A u - f of its own problem, whose load carries the sliding nodes'
+        # friction forces and whose fixed dofs are eliminated; the contact force is A u - f of
+        # this problem.
+        f = p.A.matvec(raw["u"]) - p.load
+        raw["contact_force"] = to_local(c.frames, f[c.nodes])
+        raw["friction_bound"] = reference.friction_bound.copy()
+        raw["state"] = reference.node_state[c.nodes].copy()
+        res = self._result(raw, opts, build)
+        res.extra["reference"] = {"method": reference.method, "cycles": reference.cycles,
+                                  "solve_seconds": reference.solve_seconds, "converged": reference.converged}
+        return res
+
+    def _result(self, raw: dict, opts: SolverOptions, build_seconds: float) -> ContactResult:
+        p = self.problem
+        raw = dict(raw)
+        raw["u"] = p.to_canonical(np.asarray(raw["u"]))
+        res = ContactResult.from_raw(p, raw, opts.method)
+        res.setup_seconds = p.assembly_seconds + build_seconds
+        res.options = opts.to_dict()
+        res.extra["cycle_options"] = {"cycle": opts.cycle, "nu1": opts.nu1, "nu2": opts.nu2}
+        res.extra["omega"] = float(raw.get("omega", 1.0))
+        if "omega_post" in raw:  # only when it differs from omega
+            res.extra["omega_post"] = float(raw["omega_post"])
+        if raw.get("petrov_galerkin"):
+            pg = np.asarray(raw["history"]["petrov_galerkin"])
+            off = np.nonzero(pg == 2)[0]
+            res.extra["petrov_galerkin"] = {"cycles": int(np.count_nonzero(pg)),
+                                            "fallback_cycle": int(off[0]) + 1 if len(off) else None}
+        if raw.get("upwind_contact_sweep"):
+            res.extra["upwind_contact_sweep"] = True
+        if raw.get("projected_coarse_correction"):
+            res.extra["projected_coarse_correction"] = True
+        if opts.method == "fixed-point" and "outer_changes" in raw:
+            res.extra["outer_changes"] = [float(c) for c in raw["outer_changes"]]
+        if "threads" in raw:
+            res.extra["threads"], res.extra["ordering"] = int(raw["threads"]), str(raw["ordering"])
+        if p.multibody:
+            res.extra["body_id"] = p.body_id
+        return res
