@@ -36,7 +36,7 @@ def main():
         a.level, a.normal_steps, a.shear_steps, a.cold = 3, 3, 3, True
     t0 = time.perf_counter()
     p = hertz_problem("triangle", a.level, a.friction)
-    p.solver
+    p.solver.core
     setup = time.perf_counter() - t0
     single = p.solve(tol=a.tol)
     print(f"level {a.level}: {2 * p.mesh.num_points} dofs, setup {setup:.2f} s; cold single solve {single.cycles} cycles "

@@ -23,6 +23,7 @@ WORKER = r'''
 import json, resource, sys
 import numpy as np
 from contactmg import _core
+from contactmg.solve.options import options_from
 def status(key):  # VmRSS (now) or VmHWM (peak so far) in bytes
     with open("/proc/self/status") as fh:
         for line in fh:
@@ -39,15 +40,15 @@ if dim == 2:
 else:
     from contactmg.examples.sphere import sphere_problem
     p = sphere_problem(cell, levels=level, friction=0.4)
-p.release_hierarchy = True
+p.default_options = options_from(p.default_options).replace(release_hierarchy=True)
 stage("problem")
-p.solver
+p.solver.core
 stage("core solver")
 r = p.solve("nmg")
 stage("solve")
 d, n = p.mesh.dim, p.mesh.num_points
-S = p.solver
-own = p.memory_bytes()
+S = p.solver.core
+own = p.solver.memory_bytes()
 fine = _core.testing.fine_matrix(S).memory_bytes()
 coarse = sum(_core.testing.coarse_matrix(S, l).memory_bytes() for l in range(S.num_levels - 1))
 core = S.memory_bytes()

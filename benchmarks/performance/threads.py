@@ -21,6 +21,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from _common import parser, write_result  # noqa: E402
 
 from contactmg import _core  # noqa: E402
+from contactmg.solve.options import options_from
 
 PHASES = ("presmooth", "linearize", "coarse_update", "coarse_correction", "postsmooth", "norm", "check")
 
@@ -78,7 +79,7 @@ def cycle_bytes(p):
     levels), the iterate and the right-hand side and writes the iterate; a product reads the matrix
     and x and writes y; a transfer reads the prolongation (scalar weights, 32-bit columns) and both
     vectors."""
-    S, d, opt = p.solver, p.mesh.dim, p.default_cycle
+    S, d, opt = p.solver.core, p.mesh.dim, p.solver.options
     nu = opt.nu1 + opt.nu2
     vec = lambda n: 8 * d * n  # noqa: E731
     T = p.hierarchy.transfers
@@ -100,8 +101,8 @@ def time_case(label, make, repeats, threads, stream):
     problems = {}
     for ordering in ("coloured", "lexicographic"):
         p = make()
-        p.default_ordering = ordering
-        p.solver  # noqa: B018 - built outside the timings
+        p.default_options = options_from(p.default_options).replace(ordering=ordering)
+        p.solver.core  # noqa: B018 - built outside the timings
         problems[ordering] = p
     runs = {c: [] for c in configs}
     for _ in range(repeats):
@@ -110,7 +111,7 @@ def time_case(label, make, repeats, threads, stream):
     rows = []
     for (ordering, t), rs in runs.items():
         p = problems[ordering]
-        nu = p.default_cycle.nu1 + p.default_cycle.nu2
+        nu = p.solver.options.nu1 + p.solver.options.nu2
         b = cycle_bytes(p)
         spc = float(np.median([r.solve_seconds / r.cycles for r in rs]))
         sweep = float(np.median([(r.phase_seconds["presmooth"] + r.phase_seconds["postsmooth"]) / (nu * r.cycles)
@@ -143,7 +144,7 @@ def counts(levels, frictions):
             row = {"level": L, "F": F}
             for o in ("lexicographic", "coloured"):
                 p = hertz_problem("triangle", L, F)
-                p.default_ordering = o
+                p.default_options = options_from(p.default_options).replace(ordering=o)
                 r = p.solve("nmg", ordering=o)
                 row[o] = r.cycles if r.converged else None
             rows.append(row)

@@ -28,7 +28,7 @@ if kind == "adaptive":
 for F in frictions:
     t0 = time.perf_counter()
     p = sphere.sphere_problem(cell, L, F, hierarchy=h if h is not None else "uniform")
-    p.solver
+    p.solver.core
     out["setup_seconds"] = time.perf_counter() - t0
     res = p.solve(tol=1e-11, max_cycles=200)
     out["nodes"], out["dofs"] = p.mesh.num_points, 3 * p.mesh.num_points

@@ -75,7 +75,7 @@ out = {"level": L, "E2": E2, "nu2": nu2, "cycles": {}, "rate": {}, "solve_second
 for F in frictions:
     t0 = time.perf_counter()
     p = spheres.spheres_problem(levels=L, friction=F, E2=E2, nu2=nu2)
-    p.solver
+    p.solver.core
     out["setup_seconds"] = time.perf_counter() - t0
     res = p.solve(tol=1e-11, max_cycles=200, threads=1)
     out["nodes"], out["dofs"], out["nonmortar_nodes"] = p.mesh.num_points, 3 * p.mesh.num_points, len(p.contact.nodes)

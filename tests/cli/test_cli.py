@@ -119,7 +119,7 @@ def test_solve_releases_the_gil():
     from contactmg.examples import hertz
 
     p = hertz.hertz_problem("triangle", 7, 0.4)
-    p.solver  # noqa: B018
+    p.solver.core  # noqa: B018
     stamps = []
     done = threading.Event()
 
@@ -151,7 +151,7 @@ def test_ctrl_c_inside_the_cycles_stops_the_solve():
     code = ("import sys, time\n"
             "import signal; signal.signal(signal.SIGINT, signal.default_int_handler)\n"  # a suite started in the background inherits SIGINT ignored
             "from contactmg.examples import hertz\n"
-            "p = hertz.hertz_problem('triangle', 7, 0.4); s = p.solver\n"
+            "p = hertz.hertz_problem('triangle', 7, 0.4); s = p.solver.core\n"
             "seen = []\n"
             "def progress(rec):\n"
             "    seen.append(rec['cycle'])\n"

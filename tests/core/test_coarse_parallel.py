@@ -12,12 +12,13 @@ from contactmg import _core
 from contactmg.results.checks import VIOLATION_TOL, contact_conditions
 from contactmg.examples.hertz import hertz_problem
 from contactmg.examples.sphere import sphere_problem
+from contactmg.solve.options import options_from
 
 
 def fresh_solve(make, **kw):
     # a fresh problem per solve: a solver carries its coarse hierarchy from one solve to the next
     p = make()
-    p.default_ordering = kw.get("ordering", "coloured")
+    p.default_options = options_from(p.default_options).replace(ordering=kw.get("ordering", "coloured"))
     return p, p.solve("nmg", **kw)
 
 
@@ -41,7 +42,7 @@ def test_the_parallel_paths_change_no_bit(make):
 
 def coarsest_factorizations_of(make, **kw):
     p, r = fresh_solve(make, **kw)
-    return p, r, _core.testing.coarsest_factorizations(p.solver)
+    return p, r, _core.testing.coarsest_factorizations(p.solver.core)
 
 
 @pytest.mark.parametrize("levels", [2, 3])

@@ -88,7 +88,7 @@ def test_3d_coarse_matrix_carries_the_friction_hessian():
     agree with a full rebuild, and differ from the product without the Hessian."""
     h = box_hierarchy(2, 3, 0.0, 1.0)
     p = ContactProblem(h, MAT, [Dirichlet([TOP], SHEAR)], contact_tags=[BOTTOM], obstacle=PLANE, friction=Coulomb(0.3))
-    s = p.solver
+    s = p.solver.core
     r = s.solve()
     assert r["converged"] and np.sum(r["state"] == 2) > 0
     top = s.num_levels - 2
@@ -160,7 +160,7 @@ def test_3d_half_model_with_a_roller_equals_the_full_model(friction):
     assert np.abs(uf - uh).max() <= 1e-8 * np.abs(uf).max(), np.abs(uf - uh).max() / np.abs(uf).max()
     on_plane = half.contact.nodes[np.abs(xh[half.contact.nodes, 0]) < 1e-12]
     assert len(on_plane) > 0 and np.all(uh[on_plane, 0] == 0.0)
-    Q = half.solver.frames
+    Q = half.solver.core.frames
     c = np.searchsorted(half.contact.nodes, on_plane)
     np.testing.assert_allclose(np.abs(Q[c][:, :, 1]), np.broadcast_to([1.0, 0.0, 0.0], (len(c), 3)), atol=1e-15)
 

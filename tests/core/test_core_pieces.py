@@ -105,15 +105,15 @@ def hertz():
 
 def test_rows_to_smooth_hook(hertz):
     p = hertz
-    base = p.solver.solve()
+    base = p.solver.core.solve()
     # listing every row explicitly is the default
-    every = p._new_core_solver(p.law, p.default_cycle)
+    every = p.solver.new_core()
     for lvl in range(every.num_levels - 1):
         every.set_rows_to_smooth(lvl, np.arange(_core.testing.coarse_matrix(every, lvl).shape[0] // 2, dtype=np.int64))
     r_all = every.solve()
     np.testing.assert_array_equal(r_all["history"]["correction_norm"], base["history"]["correction_norm"])
     # smoothing only half of the rows of the second-finest level changes the cycle, not the answer
-    sub = p._new_core_solver(p.law, p.default_cycle)
+    sub = p.solver.new_core()
     top = sub.num_levels - 2
     n_top = _core.testing.coarse_matrix(sub, top).shape[0] // 2
     sub.set_rows_to_smooth(top, np.arange(0, n_top, 2, dtype=np.int64))
@@ -127,12 +127,12 @@ def test_rows_to_smooth_hook(hertz):
 
 def test_cycle_options_per_solve(hertz):
     p = hertz
-    s = p.solver
+    s = p.solver.core
     default = s.solve()
     v11 = s.solve(None, {"cycle": "V", "nu1": 1, "nu2": 1})
     ref = _core.ContactSolver2D(p.A, p.load, p.fixed, p.fixed_values, p.contact.nodes, p.contact.normals, p.contact.gaps,
                                 p.coefficients, p.law, [t.as_tuple() for t in p.hierarchy.transfers],
-                                {"cycle": "V", "nu1": 1, "nu2": 1, "ordering": p.default_ordering})
+                                {"cycle": "V", "nu1": 1, "nu2": 1, "ordering": resolve_options(p).ordering})
     # the same cycles as a solver built with V(1,1) (and the problem's ordering) (up to the round-off of incremental coarse updates,
     # which the Anderson mixing of settled Coulomb cycles amplifies: 1.4e-7 relative by cycle 10; where the
     # mixing continues across a state change -- V(1,1) here, from cycle 8 -- that can move the stop by a cycle)
@@ -154,7 +154,7 @@ def test_cycle_options_per_solve(hertz):
 
 
 def test_progress_callback(hertz):
-    s = hertz.solver
+    s = hertz.solver.core
     seen = []
     r = s.solve(progress=lambda rec: seen.append((rec["cycle"], rec["correction_norm"], rec["active"])))
     assert [c for c, _, _ in seen] == list(range(1, r["cycles"] + 1))
@@ -177,7 +177,7 @@ def test_progress_callback(hertz):
 
 # -- frames ------------------------------------------------------------------------------------
 def test_frames_are_returned_and_orthonormal(hertz):
-    s = hertz.solver
+    s = hertz.solver.core
     r = s.solve(None, {"max_cycles": 1})
     Q = r["frames"]
     np.testing.assert_array_equal(Q, s.frames)

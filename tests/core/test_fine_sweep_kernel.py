@@ -11,12 +11,13 @@ from contactmg.model.friction import Tresca
 from contactmg.examples.hertz import hertz_problem
 from contactmg.examples.sphere import sphere_problem
 from contactmg import _core
+from contactmg.solve.options import options_from, resolve_options
 
 
 def _solve(make, **kw):
     p = make()
-    p.default_ordering = "coloured"
-    assert p.solver.renumbered  # stored by colours: the kernel's case
+    p.default_options = options_from(p.default_options).replace(ordering="coloured")
+    assert p.solver.core.renumbered  # stored by colours: the kernel's case
     return p, p.solve("nmg", **kw)
 
 
@@ -25,8 +26,8 @@ def _kernel_and_per_row(p, res, threads, omega):
     change state inside the sweeps, so the kernel's hand-over to the nodal solve is exercised."""
     rng = np.random.default_rng(7)
     u0 = res.displacement * (1 + 0.3 * rng.standard_normal(res.displacement.shape))
-    a = _core.testing.smooth(p.solver, u0, 3, ordering="coloured", threads=threads, omega=omega)
-    b = _core.testing.smooth(p.solver, u0, 3, ordering="coloured", threads=threads, omega=omega, per_row=True)
+    a = _core.testing.smooth(p.solver.core, u0, 3, ordering="coloured", threads=threads, omega=omega)
+    b = _core.testing.smooth(p.solver.core, u0, 3, ordering="coloured", threads=threads, omega=omega, per_row=True)
     assert not np.array_equal(a, u0)
     return a, b
 
@@ -58,7 +59,7 @@ CASES = {
 def test_range_kernel_equals_the_per_row_sweep_bit_for_bit(case, threads):
     p, res = _solve(CASES[case], threads=threads)
     assert res.converged
-    a, b = _kernel_and_per_row(p, res, threads, p.smoothing_omega())
+    a, b = _kernel_and_per_row(p, res, threads, resolve_options(p).omega)
     assert np.array_equal(a, b)
     if case == "coulomb-2d":
         # the solve went through every kind of fine row: free, sticking and sliding contact nodes
@@ -79,7 +80,7 @@ def test_range_kernel_with_the_other_laws(law):
     make = (lambda: _hertz_with(Tresca(2.0))) if law == "tresca" else (lambda: _hertz_with(None, contact=False))
     p, res = _solve(make)
     assert p.law == law and res.converged
-    for omega in (1.0, p.smoothing_omega()):
+    for omega in (1.0, resolve_options(p).omega):
         a, b = _kernel_and_per_row(p, res, 1, omega)
         assert np.array_equal(a, b)
 
@@ -90,5 +91,5 @@ def test_sweeps_from_a_perturbed_solution_agree_bit_for_bit(threads):
     a, b = _kernel_and_per_row(p, res, threads, 1.0)
     assert np.array_equal(a, b)
     # and the kernel keeps the solution a fixed point (to round-off)
-    u = _core.testing.smooth(p.solver, res.displacement, 2, ordering="coloured", threads=threads)
+    u = _core.testing.smooth(p.solver.core, res.displacement, 2, ordering="coloured", threads=threads)
     assert np.abs(u - res.displacement).max() <= 1e-9 * np.abs(res.displacement).max()

@@ -40,19 +40,19 @@ def other_data(p, seed):
 def test_set_load_and_fixed_values_give_a_fresh_solvers_bits(make, method):
     p = make()
     opts = {"method": method, "threads": 1}
-    kept = p._new_core_solver(p.law, p.default_cycle)
+    kept = p.solver.new_core()
     kept.solve(None, opts)  # a solve of the old data first: nothing of it may remain
     load, values = other_data(p, 1)
     kept.set_load(load)
     kept.set_fixed_values(values)
     got = kept.solve(None, opts)
-    fresh = p._new_core_solver(p.law, p.default_cycle, load=load, fixed_values=values).solve(None, opts)
+    fresh = p.solver.new_core(load=load, fixed_values=values).solve(None, opts)
     assert fresh["converged"], fresh["status"]
     same_solve(got, fresh)
     # and back to the problem's own data: the problem's own solve
     kept.set_load(p.load)
     kept.set_fixed_values(p.fixed_values)
-    same_solve(kept.solve(None, opts), p._new_core_solver(p.law, p.default_cycle).solve(None, opts))
+    same_solve(kept.solve(None, opts), p.solver.new_core().solve(None, opts))
 
 
 def test_the_steps_of_a_load_path_reuse_one_solver_bit_for_bit():
@@ -60,11 +60,11 @@ def test_the_steps_of_a_load_path_reuse_one_solver_bit_for_bit():
     previous step's slip origin and start: the steps of solvers built per step."""
     p = hertz_problem("triangle", 4, 0.4)
     path = two_phase_path(p, [HERTZ_TOP], (0.0, TOP_DISPLACEMENT), 2, (0.002, 0.0), 2)
-    kept = p._new_core_solver(p.law, p.default_cycle)
+    kept = p.solver.new_core()
     previous = None
     for k in range(len(path)):
         data = path.step_data(k)
-        fresh = p._new_core_solver(p.law, p.default_cycle, load=data.load, fixed_values=data.fixed_values)
+        fresh = p.solver.new_core(load=data.load, fixed_values=data.fixed_values)
         kept.set_load(data.load)
         kept.set_fixed_values(data.fixed_values)
         for s in (fresh, kept):

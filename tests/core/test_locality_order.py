@@ -7,12 +7,13 @@ import pytest
 from contactmg.examples.cylinders import cylinders_problem
 from contactmg.examples.hertz import hertz_problem
 from contactmg import _core
+from contactmg.solve.options import options_from
 
 
 def _built(make, storage="coloured"):
     p = make()
-    p.default_ordering = storage
-    p.solver
+    p.default_options = options_from(p.default_options).replace(ordering=storage)
+    p.solver.core
     return p
 
 
@@ -31,7 +32,7 @@ def test_locality_order_keeps_the_users_numbering():
     # against a solver that stores its levels in the user's numbering
     make = lambda: hertz_problem("triangle", 5, 0.4)
     user, new = _built(make, "lexicographic"), _built(make)
-    So, Sn = user.solver, new.solver
+    So, Sn = user.solver.core, new.solver.core
     assert Sn.renumbered and not So.renumbered
     for get in [lambda S: _core.testing.fine_matrix(S)] + [lambda S, l=l: _core.testing.coarse_matrix(S, l) for l in range(So.num_levels - 1)]:
         Mo, Mn = get(So), get(Sn)

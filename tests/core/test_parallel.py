@@ -11,6 +11,7 @@ import pytest
 from contactmg import _core
 from contactmg.examples.hertz import hertz_problem
 from contactmg.examples.sphere import sphere_problem
+from contactmg.solve.options import options_from
 
 
 def fresh_solve(make, storage=None, **kw):
@@ -19,7 +20,7 @@ def fresh_solve(make, storage=None, **kw):
     # ordering the core solver is built for (coloured: its levels stored by colours)
     p = make()
     if storage is not None:
-        p.default_ordering = storage
+        p.default_options = options_from(p.default_options).replace(ordering=storage)
     return p.solve("nmg", **kw)
 
 
@@ -62,7 +63,7 @@ def test_coloured_order_solves_the_same_problem_in_about_as_many_cycles(levels):
 def test_coloured_sweeps_lower_the_energy_and_keep_the_solution():
     p = hertz_problem("triangle", 6, 0.4)
     res = p.solve("nmg", ordering="lexicographic")
-    S = p.solver
+    S = p.solver.core
     # a solution is a fixed point of the coloured nonlinear sweep too (every nodal rule keeps it)
     u = _core.testing.smooth(S, res.displacement, 2, ordering="coloured", threads=2)
     assert np.abs(u - res.displacement).max() <= 1e-9 * np.abs(res.displacement).max()
@@ -75,8 +76,9 @@ def test_coloured_sweeps_lower_the_energy_and_keep_the_solution():
 def _pair(make):
     """The same problem with a solver in the user's order and one stored by colours."""
     user, by_colours = make(), make()
-    user.default_ordering, by_colours.default_ordering = "lexicographic", "coloured"
-    assert not user.solver.renumbered and by_colours.solver.renumbered
+    user.default_options = options_from(user.default_options).replace(ordering="lexicographic")
+    by_colours.default_options = options_from(by_colours.default_options).replace(ordering="coloured")
+    assert not user.solver.core.renumbered and by_colours.solver.core.renumbered
     return user, by_colours
 
 
@@ -99,7 +101,7 @@ def test_storage_by_colours_is_the_coloured_method_in_the_users_numbering(make):
     np.testing.assert_allclose(cn[:8], b.history["correction_norm"][:8], rtol=1e-8, atol=1e-12 * cn[0])
     np.testing.assert_allclose(b.contact_force, a.contact_force, atol=1e-9 * np.abs(a.contact_force).max())
     # the matrices handed out are in the user's numbering: the same pattern, the same values
-    Su, Sc = user.solver, by_colours.solver
+    Su, Sc = user.solver.core, by_colours.solver.core
     for get in [lambda S: _core.testing.fine_matrix(S)] + [lambda S, l=l: _core.testing.coarse_matrix(S, l) for l in range(Su.num_levels - 1)]:
         Mu, Mc = get(Su), get(Sc)
         assert np.array_equal(Mu.indptr, Mc.indptr) and np.array_equal(Mu.indices, Mc.indices)
@@ -123,19 +125,19 @@ def test_inputs_in_the_users_numbering_on_a_solver_stored_by_colours():
     b = by_colours.solve("nmg", ordering="coloured", u0=u0, error_reference=ref.displacement)
     assert a.cycles == b.cycles and a.cycles < ref.cycles
     np.testing.assert_allclose(b.history["error"][:4], a.history["error"][:4], rtol=1e-6)
-    for S in (user.solver, by_colours.solver):
+    for S in (user.solver.core, by_colours.solver.core):
         assert np.abs(_core.testing.smooth(S, ref.displacement, 2, ordering="coloured") - ref.displacement).max() <= 1e-9 * np.abs(ref.displacement).max()
-    top = user.solver.num_levels - 2
-    n_top = _core.testing.coarse_matrix(user.solver, top).shape[0] // 2
+    top = user.solver.core.num_levels - 2
+    n_top = _core.testing.coarse_matrix(user.solver.core, top).shape[0] // 2
     rows = np.arange(0, n_top, 2, dtype=np.int64)
-    for S in (user.solver, by_colours.solver):
+    for S in (user.solver.core, by_colours.solver.core):
         S.set_rows_to_smooth(top, rows)
     a = user.solve("nmg", ordering="coloured")
     b = by_colours.solve("nmg", ordering="coloured")
     assert a.converged and b.converged and a.cycles == b.cycles
     assert np.abs(a.displacement - b.displacement).max() <= 1e-11 * np.abs(a.displacement).max()
     with pytest.raises(ValueError, match="outside"):
-        by_colours.solver.set_rows_to_smooth(top, np.array([n_top], np.int64))
+        by_colours.solver.core.set_rows_to_smooth(top, np.array([n_top], np.int64))
 
 
 def test_the_core_takes_the_matrix_over_and_A_is_assembled_again_on_demand():
@@ -173,7 +175,7 @@ def test_coloured_sweeps_lower_the_energy_frictionless():
     # frictionless contact minimizes 1/2 u.Au - f.u over the feasible set: each exact nodal
     # minimization lowers it, in any order (after the first sweep has put the Dirichlet values)
     p = hertz_problem("triangle", 6, 0.0)
-    S, A, f = p.solver, p.A, p.load
+    S, A, f = p.solver.core, p.A, p.load
     energy = lambda v: 0.5 * float(np.sum(v * A.matvec(v))) - float(np.sum(f * v))
     u = _core.testing.smooth(S, np.zeros((p.mesh.num_points, 2)), 1, ordering="coloured", threads=2)
     e = [energy(u)]

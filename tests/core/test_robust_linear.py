@@ -79,16 +79,16 @@ def test_lines_follow_the_short_direction_and_reduce_to_points_without_anisotrop
     more nodes, so their linear correction is the point-block one."""
     p = layer(8, level=3)
     x = p.mesh.points
-    lines = [l for l in _core.testing.fine_lines(p.solver) if len(l) > 1]
+    lines = [l for l in _core.testing.fine_lines(p.solver.core) if len(l) > 1]
     assert sum(len(l) for l in lines) >= 0.75 * p.mesh.num_points  # all but the side columns and the clamped top
     for l in lines:
         assert np.ptp(x[l, 0]) < 1e-12  # one vertical line
         assert np.all(np.abs(np.diff(x[l, 1])) > 0)
     for q in (layer(1, level=3), hertz.hertz_problem("quad", 3, 0.4)):
-        assert max(len(l) for l in _core.testing.fine_lines(q.solver)) == 1
-        assert all(max(len(l) for l in _core.testing.coarse_lines(q.solver, k)) == 1 for k in range(q.solver.num_levels - 1))
+        assert max(len(l) for l in _core.testing.fine_lines(q.solver.core)) == 1
+        assert all(max(len(l) for l in _core.testing.coarse_lines(q.solver.core, k)) == 1 for k in range(q.solver.core.num_levels - 1))
     # the Galerkin levels of the stretched layer keep their lines
-    assert max(len(l) for l in _core.testing.coarse_lines(p.solver, p.solver.num_levels - 2)) > 4
+    assert max(len(l) for l in _core.testing.coarse_lines(p.solver.core, p.solver.core.num_levels - 2)) > 4
 
 
 def test_pcg_lowers_the_energy_error_monotonically():
@@ -97,7 +97,7 @@ def test_pcg_lowers_the_energy_error_monotonically():
     without line smoothing, to the exact solution (checked by the residual K w - r, computed
     independently from the fine matrix); Dirichlet dofs stay zero."""
     p = layer(8, level=4)
-    S = p.solver
+    S = p.solver.core
     free = ~p.fixed.astype(bool)
     r = np.random.default_rng(2).normal(size=(p.mesh.num_points, 2))
     rm = np.where(free, r, 0.0)

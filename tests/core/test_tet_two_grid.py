@@ -15,6 +15,7 @@ from contactmg.mesh.generators_3d import box
 from contactmg.mesh.hierarchy import MeshHierarchy
 from contactmg.model.material import Material
 from contactmg.solve.contact_problem import ContactProblem, Dirichlet
+from contactmg.solve.solver import Solver
 
 
 def contraction(problem, cycles=14, seed=0):
@@ -22,13 +23,9 @@ def contraction(problem, cycles=14, seed=0):
     geometric mean of the last five ratios. Returns (rate, seconds per cycle)."""
     rng = np.random.default_rng(seed)
     u0 = rng.standard_normal(problem.load.shape)
-    problem.load, saved = np.zeros_like(problem.load), problem.load
-    problem._solvers.clear()  # the core solver keeps its own copy of the load
-    try:
-        res = problem.solve(u0=u0, tol=1e-300, rtol=1e-300, max_cycles=cycles)
-    finally:
-        problem.load = saved
-        problem._solvers.clear()
+    # a solver of its own, whose core takes the zero load (the problem's kept solver is untouched)
+    res = Solver(problem, problem.default_options).solve(
+        u0, load=np.zeros_like(problem.load), options=dict(tol=1e-300, rtol=1e-300, max_cycles=cycles))
     c = np.asarray(res.history["correction_norm"])
     ratios = c[1:] / c[:-1]
     return float(np.exp(np.mean(np.log(ratios[-5:])))), res.solve_seconds / res.cycles

@@ -14,11 +14,13 @@ import pytest
 from contactmg.results.checks import VIOLATION_TOL, contact_conditions
 from contactmg.examples.hertz import hertz_adaptive_hierarchy, hertz_problem, hertz_problem_on
 from contactmg.examples.sphere import sphere_problem
+from contactmg.solve.options import options_from
+from contactmg.solve.solver import memory_report
 
 
 def released(make):
     p = make()
-    p.release_hierarchy = True
+    p.default_options = options_from(p.default_options).replace(release_hierarchy=True)
     return p
 
 
@@ -52,7 +54,7 @@ def test_results_output_and_check_need_nothing_released(tmp_path):
     r = p.solve("nmg")
     assert p.hierarchy.released
     levels = p.hierarchy.levels
-    assert p.memory_bytes()["problem_vectors"] < p.mesh.num_points * p.mesh.dim * 8  # load and Dirichlet values dropped
+    assert p.solver.memory_bytes()["problem_vectors"] < p.mesh.num_points * p.mesh.dim * 8  # load and Dirichlet values dropped
     path = tmp_path / "out.vtu"
     r.write_vtu(path)
     c = contact_conditions(p, r)
@@ -76,7 +78,7 @@ def test_results_output_and_check_need_nothing_released(tmp_path):
 def test_released_levels_come_back_identical():
     keep = hertz_problem("triangle", 5, 0.4).hierarchy
     p = released(lambda: hertz_problem("triangle", 5, 0.4))
-    p.solver
+    p.solver.core
     h = p.hierarchy
     assert h.released and h.levels == keep.levels and h.finest is p.mesh
     for a, b in zip(h.meshes, keep.meshes):
@@ -93,7 +95,7 @@ def test_released_levels_come_back_identical():
 def test_adaptive_hierarchies_are_kept():
     h = hertz_adaptive_hierarchy(3, 0.4)
     p = hertz_problem_on(h, 0.4)
-    p.release_hierarchy = True
+    p.default_options = options_from(p.default_options).replace(release_hierarchy=True)
     assert not h.can_release()
     assert p.solve("nmg").converged
     assert not h.released and len(h.transfers) == h.levels - 1
@@ -101,16 +103,16 @@ def test_adaptive_hierarchies_are_kept():
 
 def test_memory_accounting_adds_up():
     p = hertz_problem("triangle", 5, 0.4)
-    before = p.memory_bytes()
+    before = memory_report(p)
     assert before["core"] == 0 and before["python_matrix"] > 0
-    p.release_hierarchy = True
+    p.default_options = options_from(p.default_options).replace(release_hierarchy=True)
     p.solve("nmg")
-    after = p.memory_bytes()
+    after = p.solver.memory_bytes()
     for m in (before, after):
         assert m["total"] == sum(v for k, v in m.items() if k != "total")
     # the core took the matrix over, the coarse meshes, the transfers, the load and the Dirichlet
     # values are gone, the finest mesh stays
-    assert after["python_matrix"] == 0 and after["transfers"] == 0 and after["core"] == p.solver.memory_bytes()
+    assert after["python_matrix"] == 0 and after["transfers"] == 0 and after["core"] == p.solver.core.memory_bytes()
     assert before["problem_vectors"] - after["problem_vectors"] == 2 * 8 * p.mesh.num_points * p.mesh.dim
     fine = p.mesh
     assert after["mesh_hierarchy"] == sum(a.nbytes for a in (fine.points, fine.cells, fine.facets, fine.facet_tags))
@@ -152,7 +154,7 @@ def test_hierarchies_pickle_and_old_pickles_load():
     from contactmg.mesh.hierarchy import MeshHierarchy
 
     p = released(lambda: hertz_problem("triangle", 3, 0.4))
-    p.solver
+    p.solver.core
     h = pickle.loads(pickle.dumps(p.hierarchy))
     assert h.released and h.levels == 3
     assert np.array_equal(h.meshes[1].cells, hertz_problem("triangle", 3, 0.4).hierarchy.meshes[1].cells)

@@ -165,7 +165,7 @@ def test_incremental_coarse_update_equals_full_rebuild():
     p = hertz.hertz_problem("triangle", 6, 0.4)
     res = p.solve()
     assert res.rebuilds >= 3
-    S = p.solver
+    S = p.solver.core
     before = [to_scipy(_core.testing.coarse_matrix(S, l)) for l in range(S.num_levels - 1)]
     _core.testing.rebuild_coarse(S)
     after = [to_scipy(_core.testing.coarse_matrix(S, l)) for l in range(S.num_levels - 1)]

@@ -14,6 +14,7 @@ from contactmg.model.frames import to_local
 from contactmg.mesh.generators import HERTZ_TOP
 from contactmg.examples.hertz import TOP_DISPLACEMENT, hertz_problem
 from contactmg.solve.loadpath import LoadPath, two_phase_path
+from contactmg.solve.options import resolve_options
 from contactmg.results.result import SLIP, STICK
 from contactmg.results.series import read_pvd_collection
 
@@ -48,11 +49,11 @@ def test_one_step_path_is_the_single_solve(problem):
 
 def test_one_step_path_on_an_adaptive_hierarchy_takes_the_problem_defaults():
     """There the single solve over-relaxes its post-smoothing and couples the sliding nodes
-    (issue 11, tenth part): the path's steps make the same choices, so one step is that solve."""
+    (0006-petrov-galerkin-coupling): the path's steps make the same choices, so one step is that solve."""
     from contactmg.examples.hertz import hertz_adaptive_hierarchy
 
     p = hertz_problem("triangle", 6, 2.0, coulomb_at_zero=True, hierarchy=hertz_adaptive_hierarchy(6, 0.4))
-    assert p.petrov_galerkin_coupling() and p.post_smoothing_omega() is not None
+    assert resolve_options(p).petrov_galerkin and resolve_options(p).omega_post != resolve_options(p).omega
     ref = p.solve(tol=1e-11)
     assert ref.extra["petrov_galerkin"]["cycles"] > 0
     r = LoadPath.proportional(p, 1).solve(tol=1e-11).last
@@ -62,8 +63,8 @@ def test_one_step_path_on_an_adaptive_hierarchy_takes_the_problem_defaults():
 def test_zero_slip_origin_changes_nothing(problem):
     """A slip origin of zero is the reference configuration: the same iterates to the last bit
     (fresh core solvers each: a core's coarse matrices carry over between solves, round-off too)."""
-    ref = problem._new_core_solver(problem.law, problem.default_cycle).solve(None, {"tol": 1e-11})
-    core = problem._new_core_solver(problem.law, problem.default_cycle)
+    ref = problem.solver.new_core().solve(None, {"tol": 1e-11})
+    core = problem.solver.new_core()
     core.set_slip_origin(np.zeros_like(ref["u"]))
     assert core.has_slip_origin
     raw = core.solve(None, {"tol": 1e-11})

@@ -10,6 +10,7 @@ import pytest
 from contactmg.results.checks import VIOLATION_TOL, contact_conditions
 from contactmg.examples.hertz import hertz_adaptive_hierarchy, hertz_problem, hertz_problem_on
 from contactmg.examples.table1 import table1
+from contactmg.solve.options import options_from, resolve_options
 
 
 @pytest.fixture(scope="module")
@@ -29,10 +30,10 @@ def energy_norm(p, v):
 
 def test_local_smoothing_is_on_for_adaptive_hierarchies_and_reaches_the_same_solution(graded):
     full = hertz_problem_on(graded, 0.4)
-    full.local_smoothing = False
+    full.default_options = options_from(full.default_options).replace(local_smoothing=False)
     local = hertz_problem_on(graded, 0.4)
-    assert local.smooths_locally() and not full.smooths_locally()
-    assert not hertz_problem("triangle", 3, 0.4).smooths_locally()  # uniform: every node changes
+    assert resolve_options(local).local_smoothing and not resolve_options(full, full.default_options).local_smoothing
+    assert not resolve_options(hertz_problem("triangle", 3, 0.4)).local_smoothing  # uniform: every node changes
     rf, rl = full.solve(), local.solve()
     assert rf.converged and rl.converged
     assert contact_conditions(local, rl)["max"] < VIOLATION_TOL

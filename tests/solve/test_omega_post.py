@@ -14,6 +14,7 @@ from contactmg.mesh.hierarchy import MeshHierarchy
 from contactmg.model.material import Material
 from contactmg.model.obstacle import PlaneObstacle
 from contactmg.solve.contact_problem import ContactProblem, Dirichlet
+from contactmg.solve.options import options_from, resolve_options
 
 
 
@@ -34,10 +35,10 @@ def rate(h, omega, omega_post=None):
 
 def test_off_by_default_and_bad_values():
     p = hertz_problem("triangle", 2, 0.4)
-    assert p.smoother_omega_post is None
+    assert p.default_options is None
     r = p.solve()
     assert "omega_post" not in r.extra
-    same = p.solve(omega_post=p.smoothing_omega())  # equal to omega: the same sweeps, the same bits
+    same = p.solve(omega_post=resolve_options(p).omega)  # equal to omega: the same sweeps, the same bits
     assert same.cycles == r.cycles
     np.testing.assert_array_equal(same.displacement, r.displacement)
     assert p.solve(omega=1.0, omega_post=1.7).extra["omega_post"] == 1.7
@@ -74,7 +75,7 @@ def test_split_omega_tresca_cycles_stay_monotone(omega, omega_post):
 def test_algorithm2_same_solution_with_split_omega(adaptive8):
     p = hertz_problem_on(adaptive8.truncated(6), 0.4)
     a = p.solve()
-    p.smoother_omega, p.smoother_omega_post = 1.0, 1.7
+    p.default_options = options_from(p.default_options).replace(omega=1.0, omega_post=1.7)
     b = p.solve()
     assert a.converged and b.converged
     e = a.displacement - b.displacement

@@ -11,7 +11,9 @@ from contactmg.examples.hertz import hertz_adaptive_hierarchy, hertz_problem, he
 from contactmg.mesh.hierarchy import MeshHierarchy
 from contactmg.model.material import Material
 from contactmg.model.obstacle import PlaneObstacle
-from contactmg.solve.contact_problem import DEFAULT_OMEGA, ContactProblem, Dirichlet
+from contactmg.solve.options import DEFAULT_OMEGA
+from contactmg.solve.contact_problem import ContactProblem, Dirichlet
+from contactmg.solve.options import options_from, resolve_options
 
 
 @pytest.fixture(scope="module")
@@ -33,10 +35,10 @@ def rate(h, omega, cycle="F"):
 def test_default_omega_by_cell_type():
     tri = hertz_problem("triangle", 2, 0.4)
     quad = hertz_problem("quad", 2, 0.4)
-    assert tri.smoothing_omega() == DEFAULT_OMEGA["triangle"] > 1
-    assert quad.smoothing_omega() == 1.0
+    assert resolve_options(tri).omega == DEFAULT_OMEGA["triangle"] > 1
+    assert resolve_options(quad).omega == 1.0
     assert tri.solve().extra["omega"] == DEFAULT_OMEGA["triangle"]
-    tri.smoother_omega = 1.0
+    tri.default_options = options_from(tri.default_options).replace(omega=1.0)
     assert tri.solve().extra["omega"] == 1.0
     for bad in (0.0, 2.0, -1.0, True, "1.2", float("nan")):
         with pytest.raises(ValueError, match="omega"):

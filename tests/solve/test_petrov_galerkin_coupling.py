@@ -21,8 +21,10 @@ from contactmg.model.obstacle import PlaneObstacle
 from contactmg.results.checks import contact_conditions
 from contactmg.model.friction import Tresca
 from contactmg.examples.hertz import hertz_adaptive_hierarchy, hertz_problem
-from contactmg.solve.contact_problem import DEFAULT_OMEGA_POST_ADAPTIVE, ContactProblem, Dirichlet
+from contactmg.solve.options import DEFAULT_OMEGA_POST_ADAPTIVE
+from contactmg.solve.contact_problem import ContactProblem, Dirichlet
 from contactmg import _core
+from contactmg.solve.options import options_from, resolve_options
 
 
 
@@ -35,18 +37,18 @@ def same_solution(p, a, b, rtol=1e-8):
 
 def test_default_by_hierarchy_and_bad_values(adaptive7):
     p = hertz_problem("triangle", 3, 0.4)
-    assert p.petrov_galerkin is None and not p.petrov_galerkin_coupling()  # uniform: off
-    assert p.post_smoothing_omega() is None
+    assert p.default_options is None and not resolve_options(p).petrov_galerkin  # uniform: off
+    assert resolve_options(p).omega_post == resolve_options(p).omega  # no post-smoothing omega of its own
     r = p.solve()
     assert "petrov_galerkin" not in r.extra
     assert not np.any(r.history["petrov_galerkin"])
     # 2D adaptive, Coulomb: on, with the post-smoothing's own omega; the same bits as asking for both
     a = hertz_problem("triangle", 5, 2.0, coulomb_at_zero=True, hierarchy=adaptive7.truncated(5))
-    assert a.petrov_galerkin_coupling() and a.post_smoothing_omega() == DEFAULT_OMEGA_POST_ADAPTIVE["triangle"]
+    assert resolve_options(a).petrov_galerkin and resolve_options(a).omega_post == DEFAULT_OMEGA_POST_ADAPTIVE["triangle"]
     d = a.solve(threads=1)
     assert d.extra["petrov_galerkin"]["cycles"] > 0
     fresh = hertz_problem("triangle", 5, 2.0, coulomb_at_zero=True, hierarchy=adaptive7.truncated(5))
-    asked = fresh.solve(threads=1, petrov_galerkin=True, omega=fresh.smoothing_omega(),
+    asked = fresh.solve(threads=1, petrov_galerkin=True, omega=resolve_options(fresh).omega,
                         omega_post=DEFAULT_OMEGA_POST_ADAPTIVE["triangle"])
     assert np.array_equal(np.asarray(d.displacement), np.asarray(asked.displacement))
     # an omega given to solve is the post-smoothing's too (no default post omega beside it)
@@ -56,18 +58,17 @@ def test_default_by_hierarchy_and_bad_values(adaptive7):
                        hierarchy=adaptive7.truncated(5)).solve(threads=1, omega=1.0, omega_post=1.0)
     assert np.array_equal(np.asarray(w1.displacement), np.asarray(w2.displacement))
     # frictionless: nothing to couple
-    assert not hertz_problem("triangle", 5, 0.0, hierarchy=adaptive7.truncated(5)).petrov_galerkin_coupling()
+    assert not resolve_options(hertz_problem("triangle", 5, 0.0, hierarchy=adaptive7.truncated(5))).petrov_galerkin
     check_switch_refuses_bad_values(p, "petrov_galerkin")
     with pytest.raises(ValueError, match="petrov_galerkin must be True or False"):
-        p.solver.solve(None, {"petrov_galerkin": 1})  # the core refuses what is not a bool
+        p.solver.core.solve(None, {"petrov_galerkin": 1})  # the core refuses what is not a bool
     p.solve("tnnmg", petrov_galerkin=False)  # off is every method's
     from contactmg.solve.loadpath import LoadPath
-    p.petrov_galerkin = "yes"  # the problem's attribute is checked alike, for a solve and a load path
+    # a bad default is refused when made; a load path checks its options alike
     with pytest.raises(ValueError, match="petrov_galerkin must be True or False"):
-        p.solve()
+        options_from(p.default_options).replace(petrov_galerkin="yes")
     with pytest.raises(ValueError, match="petrov_galerkin must be True or False"):
-        LoadPath.proportional(p, 2).solve()
-    p.petrov_galerkin = None
+        LoadPath.proportional(p, 2).solve(petrov_galerkin="yes")
 
 
 @pytest.mark.parametrize("level, F", [(5, 0.4), (5, 2.0), (6, 1.0)])
@@ -84,11 +85,11 @@ def test_same_solution_with_the_coupling_in_use(level, F):
     assert pg[0] == 0 and np.all(pg[1:] == 1)
     assert abs(on.cycles - off.cycles) <= 2
     # the solve leaves the top coarse level symmetric again: the coupling's term (F K_n entries) is gone
-    top = _core.testing.coarse_matrix(p.solver, p.hierarchy.levels - 2)
+    top = _core.testing.coarse_matrix(p.solver.core, p.hierarchy.levels - 2)
     m = top_matrix(top)
     assert abs(m - m.T).max() <= 1e-12 * abs(m).max()
-    _core.testing.rebuild_coarse(p.solver)
-    assert abs(top_matrix(_core.testing.coarse_matrix(p.solver, p.hierarchy.levels - 2)) - m).max() <= 1e-11 * abs(m).max()
+    _core.testing.rebuild_coarse(p.solver.core)
+    assert abs(top_matrix(_core.testing.coarse_matrix(p.solver.core, p.hierarchy.levels - 2)) - m).max() <= 1e-11 * abs(m).max()
 
 
 def top_matrix(A):
@@ -111,7 +112,7 @@ def test_orderings_and_threads_agree(ordering):
 
 def test_problem_default_and_linear_reference():
     p = hertz_problem("triangle", 5, 2.0, coulomb_at_zero=True)
-    p.petrov_galerkin = True  # forced on a uniform hierarchy
+    p.default_options = options_from(p.default_options).replace(petrov_galerkin=True)  # forced on a uniform hierarchy
     r = p.solve(threads=1)
     assert r.extra["petrov_galerkin"]["cycles"] > 0
     assert p.solve(threads=1, petrov_galerkin=False).extra.get("petrov_galerkin") is None

@@ -15,26 +15,28 @@ from helpers import check_switch_refuses_bad_values
 from contactmg.results.checks import contact_conditions
 from contactmg.examples.cork import cork_problem
 from contactmg.examples.hertz import hertz_problem
+from contactmg.solve.options import options_from, resolve_options
 
 
 
 def test_default_follows_the_contact_frames():
     cork = cork_problem(levels=2, friction=0.0)
-    assert cork.rotated_frames() and cork.coarse_correction_projected()
+    assert cork.rotated_frames() and resolve_options(cork).projected_coarse_correction
     hertz = hertz_problem("triangle", 3, 0.4)
-    assert not hertz.rotated_frames() and not hertz.coarse_correction_projected()
+    assert not hertz.rotated_frames() and not resolve_options(hertz).projected_coarse_correction
     assert "projected_coarse_correction" not in hertz.solve(threads=1).extra
     r = cork.solve(threads=1)
     assert r.extra["projected_coarse_correction"] is True
     # the line search's step per cycle is recorded: finite, >= 0 (0 would mean no descent along w)
     steps = np.asarray(r.history["step_size"])
     assert len(steps) == r.cycles and np.all(np.isfinite(steps)) and np.all(steps >= 0)
-    cork.projected_coarse_correction = False
-    assert not cork.coarse_correction_projected()
-    assert "projected_coarse_correction" not in cork.solve(threads=1).extra
-    assert "projected_coarse_correction" not in cork.cycle_switches("nmg")
-    # load paths take the problem's own choice (cycle_switches)
-    assert cork_problem(levels=2, friction=0.0).cycle_switches("nmg").get("projected_coarse_correction") is True
+    cork.default_options = options_from(cork.default_options).replace(projected_coarse_correction=False)
+    assert not resolve_options(cork, cork.default_options).projected_coarse_correction
+    off = cork.solve(threads=1)
+    assert "projected_coarse_correction" not in off.extra and off.options["projected_coarse_correction"] is False
+    assert "projected_coarse_correction" not in resolve_options(cork, cork.default_options).to_core()
+    # load paths take the problem's own choice (resolve_options)
+    assert resolve_options(cork_problem(levels=2, friction=0.0)).to_core().get("projected_coarse_correction") is True
 
 
 @pytest.mark.parametrize("friction", [0.0, 0.4])
@@ -67,7 +69,6 @@ def test_bad_values():
     p = cork_problem(levels=2, friction=0.4)
     check_switch_refuses_bad_values(p, "projected_coarse_correction")
     with pytest.raises(ValueError, match="projected_coarse_correction must be True or False"):
-        p.solver.solve(None, {"projected_coarse_correction": 1})  # the core refuses what is not a bool
-    p.projected_coarse_correction = 1
+        p.solver.core.solve(None, {"projected_coarse_correction": 1})  # the core refuses what is not a bool
     with pytest.raises(ValueError, match="projected_coarse_correction must be True or False"):
-        p.solve()
+        options_from(p.default_options).replace(projected_coarse_correction=1)

@@ -98,9 +98,9 @@ def test_cli_method_tnnmg():
 def test_core_refuses_an_unknown_method_or_option(hertz_problems):
     """One method per solve, named by the options' method; anything else is refused by name."""
     with pytest.raises(ValueError, match=r"method: unknown method 'tnnmg\+fixed-point'"):
-        hertz_problems["triangle", 0.4].solver.solve(None, {"method": "tnnmg+fixed-point"})
+        hertz_problems["triangle", 0.4].solver.core.solve(None, {"method": "tnnmg+fixed-point"})
     with pytest.raises(ValueError, match="unknown option 'tnnmg'"):
-        hertz_problems["triangle", 0.4].solver.solve(None, {"tnnmg": True})
+        hertz_problems["triangle", 0.4].solver.core.solve(None, {"tnnmg": True})
 
 
 def test_tnnmg_refuses_a_slip_origin():
@@ -109,7 +109,7 @@ def test_tnnmg_refuses_a_slip_origin():
     from contactmg.examples.hertz import hertz_problem
 
     p = hertz_problem("triangle", 3, 0.4)
-    s = p._new_core_solver(p.law, p.default_cycle)
+    s = p.solver.new_core()
     s.set_slip_origin(np.zeros((p.mesh.num_points, 2)))
     with pytest.raises(ValueError, match="slip origin"):
         s.solve(None, {"method": "tnnmg"})

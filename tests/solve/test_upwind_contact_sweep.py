@@ -16,6 +16,7 @@ from contactmg.examples.hertz import hertz_adaptive_hierarchy, hertz_problem
 from contactmg.solve.loadpath import LoadPath
 
 from test_petrov_galerkin_coupling import tresca_problem
+from contactmg.solve.options import options_from, resolve_options
 
 
 
@@ -33,7 +34,7 @@ def same_solution(p, a, b, rtol=1e-8):
 
 def test_default_by_hierarchy_and_bad_values(adaptive9):
     a = hertz_problem("triangle", 5, 2.0, coulomb_at_zero=True, hierarchy=adaptive9.truncated(5))
-    assert a.upwind_contact_sweep is None and a.contact_sweep_upwind()  # 2D adaptive, Coulomb: on
+    assert a.default_options is None and resolve_options(a).upwind_contact_sweep  # 2D adaptive, Coulomb: on
     r = a.solve(threads=1)
     assert r.extra["upwind_contact_sweep"] is True
     asked = hertz_problem("triangle", 5, 2.0, coulomb_at_zero=True,
@@ -43,19 +44,18 @@ def test_default_by_hierarchy_and_bad_values(adaptive9):
     assert "upwind_contact_sweep" not in off.extra
     same_solution(a, off, r)
     p = hertz_problem("triangle", 4, 2.0)  # uniform: off
-    assert not p.contact_sweep_upwind() and "upwind_contact_sweep" not in p.solve(threads=1).extra
+    assert not resolve_options(p).upwind_contact_sweep and "upwind_contact_sweep" not in p.solve(threads=1).extra
     # frictionless and Tresca: off by default (their coarse problems freeze no bound)
-    assert not hertz_problem("triangle", 4, 0.0).contact_sweep_upwind()
-    assert not tresca_problem(4).contact_sweep_upwind()
+    assert not resolve_options(hertz_problem("triangle", 4, 0.0)).upwind_contact_sweep
+    assert not resolve_options(tresca_problem(4)).upwind_contact_sweep
     check_switch_refuses_bad_values(p, "upwind_contact_sweep")
     a.solve("tnnmg", threads=1, max_cycles=50)  # the problem's default does not stop the other methods
-    # a bad problem attribute is refused where it is read: by a solve and by a load path
-    p.upwind_contact_sweep = "no"
+    # a bad value is refused where the options are made: as a default, for a solve, for a load path
     with pytest.raises(ValueError, match="upwind_contact_sweep must be True or False"):
-        p.solve()
+        options_from(p.default_options).replace(upwind_contact_sweep="no")
     with pytest.raises(ValueError, match="upwind_contact_sweep must be True or False"):
-        LoadPath.proportional(p, 2).solve()
-    p.upwind_contact_sweep = True  # forced on a uniform hierarchy
+        LoadPath.proportional(p, 2).solve(upwind_contact_sweep="no")
+    p.default_options = options_from(p.default_options).replace(upwind_contact_sweep=True)  # forced on a uniform hierarchy
     assert p.solve(threads=1).extra["upwind_contact_sweep"] is True
 
 
@@ -103,7 +103,7 @@ def test_3d_same_solution():
     h = sphere.sphere_adaptive_hierarchy(3, friction=0.4)
     for F in (0.4, 1.0):
         p = sphere.sphere_problem("tetra", 3, F, hierarchy=h)
-        assert not p.contact_sweep_upwind()
+        assert not resolve_options(p).upwind_contact_sweep
         off, on = p.solve(threads=1), p.solve(threads=1, upwind_contact_sweep=True)
         assert on.extra["upwind_contact_sweep"] is True and "upwind_contact_sweep" not in off.extra
         assert off.converged and on.converged

@@ -8,6 +8,8 @@ import os
 import resource
 import sys
 
+from ..solve.options import options_from
+
 
 EXIT_OK, EXIT_BAD_INPUT, EXIT_NO_CONVERGENCE = 0, 2, 3
 MAX_LEVELS = 12
@@ -104,17 +106,17 @@ def add_thread_options(p) -> None:
 def use_ordering(problem, args) -> None:
     """The problem's solver is built for --ordering (a coloured one stores its levels by colours)."""
     if args.ordering is not None:
-        problem.default_ordering = args.ordering
+        problem.default_options = options_from(problem.default_options).replace(ordering=args.ordering)
 
 
 def release_after_build(problem, args) -> None:
-    """A single solve (not a load path, which builds a core solver per step, nor --method linear,
-    whose second solver needs the transfers again) lets the problem drop the Python copies of the
-    coarse meshes and the transfers once its core solver holds its own (issue 15)."""
+    """A single solve (not a load path, nor --method linear, whose second solver needs the transfers
+    again) lets the problem drop the Python copies of the coarse meshes and the transfers once its
+    core solver holds its own (0011-memory-release)."""
     from ..cli import path as cli_path
 
     if not cli_path.wanted(args) and args.method != "linear":
-        problem.release_hierarchy = True
+        problem.default_options = options_from(problem.default_options).replace(release_hierarchy=True)
 
 
 def write_boundary_stress_plot(result, friction: float, path: str) -> None:

@@ -27,6 +27,7 @@ from typing import Dict, Sequence
 from ..results.checks import VIOLATION_TOL, contact_conditions
 from ..examples.hertz import ADAPTIVE_FRICTION, ADAPTIVE_THETA, PAPER_FRICTIONS, hertz_adaptive_hierarchy, hertz_problem
 from ..mesh.hierarchy import MeshHierarchy
+from ..solve.options import options_from
 
 # Measured on 2 cores (triangles, the ten coefficients of the paper): levels 2-7 take about 40 s,
 # levels 2-8 (up to 592,130 dofs, the size of the paper's finest level) 3 minutes (level 9: 23 more).
@@ -143,7 +144,7 @@ def _run_one(cell: str, L: int, F: float, full, opts: Dict, threads: int) -> Dic
         fp_kw.pop("fixed_point_stall_window", None)  # a core without the option
     fp = p.solve("fixed-point", threads=threads, **fp_kw)
     nm = p.solve("nmg", tol=opts["tol"], max_cycles=opts["max_cycles"], threads=threads)
-    return {"nodes": int(p.mesh.num_points), "cycle_type": f"{p.cycle}({p.nu1},{p.nu2})",
+    return {"nodes": int(p.mesh.num_points), "cycle_type": _cycle_type(p),
             "fixed_point_iterations": fp.outer_iterations if fp.converged else None,
             "fixed_point_vcycles": fp.cycles, "fixed_point_status": fp.status,
             "fixed_point_seconds": fp.solve_seconds, "fixed_point_violation": contact_conditions(p, fp)["max"],
@@ -266,3 +267,9 @@ def format_table(table: Dict) -> str:
         lines.append(f"{F:<9g}" + "".join(f"{c:>20}" for c in cells))
     lines.append(f"levels {table['levels']}, {table['cell']}s; {table.get('seconds', 0):.1f} s")
     return "\n".join(lines)
+
+
+def _cycle_type(p) -> str:
+    """The problem's default cycle as written in the table, e.g. F(3,3)."""
+    o = options_from(p.default_options)
+    return f"{o.cycle}({o.nu1},{o.nu2})"

@@ -19,10 +19,9 @@ import numbers
 import time
 import warnings
 from dataclasses import dataclass
-from typing import Callable, Dict, List, Optional, Sequence, Union
+from typing import TYPE_CHECKING, Callable, Dict, List, Optional, Sequence, Union
 
 import numpy as np
-import scipy.sparse as sp
 
 from .. import _core
 from ..mesh.hierarchy import MeshHierarchy, Transfer
@@ -30,8 +29,9 @@ from ..mesh.mesh import Mesh, connected_components
 from .frames import contact_frames
 from .friction import Coulomb, Frictionless, Tresca
 from .material import Material
-from .mortar import MortarCoupling, mortar_coupling_2d
-from .mortar_3d import mortar_coupling_3d
+
+if TYPE_CHECKING:
+    from .mortar import MortarCoupling
 
 VectorField = Union[Sequence[float], np.ndarray, Callable[[np.ndarray], np.ndarray]]
 
@@ -197,6 +197,10 @@ class Problem:
     fixed, fixed_values, transfers, rotated_frames(). Solving: contactmg.Solver(problem, options), or
     problem.solve(...) (installed by contactmg.solve, see there)."""
 
+    # The SolverOptions that problem.solve starts from when it is given none (None: the defaults);
+    # the description does not use it.
+    default_options = None
+
     def __init__(self, bodies, obstacle=None, friction=None, pairs=None, tied_correction: bool = True):
         t0 = time.perf_counter()
         single = isinstance(bodies, Body)
@@ -253,6 +257,7 @@ class Problem:
 
     # -- several bodies ---------------------------------------------------------------------------
     def _init_many(self, bodies: List[Body], pairs) -> None:
+        import scipy.sparse as sp  # only several bodies need it (a one-body process need not load scipy)
         if pairs is None:
             raise TypeError("several bodies need pairs: a ContactPair or a non-empty sequence of ContactPair")
         pairs = [pairs] if isinstance(pairs, ContactPair) else list(pairs)
@@ -402,6 +407,10 @@ class Problem:
         level) and, per kept nonmortar node, its union id, normal, gap, measure D and pair.
         A nonmortar node is kept where the mortar side covers the support of its dual basis
         function and no Dirichlet data (`held[body]`, per node of the body's mesh) holds it."""
+        import scipy.sparse as sp  # only several bodies need it (a one-body process need not load scipy)
+
+        from .mortar import mortar_coupling_2d
+        from .mortar_3d import mortar_coupling_3d
         meshes = [b.hierarchy.meshes[level] for b in self.bodies]
         offsets = np.r_[0, np.cumsum([m.num_points for m in meshes])].astype(np.int64)
         n = int(offsets[-1])
@@ -446,6 +455,7 @@ class Problem:
 
     def _transfers(self):
         """Per level the union of the bodies' interpolations; on the finest, T^{-1} P = (I - N) P."""
+        import scipy.sparse as sp  # only several bodies need it (a one-body process need not load scipy)
         levels = self.bodies[0].hierarchy.levels
         out = []
         for l in range(levels - 1):
@@ -595,11 +605,13 @@ def friction_coefficients(friction, contact: ContactBoundary) -> np.ndarray:
     return friction.coefficients(contact.nodes, contact.measure)
 
 
-def _bsr(A, n: int, d: int) -> sp.bsr_matrix:
+def _bsr(A, n: int, d: int):
+    import scipy.sparse as sp  # only several bodies need it (a one-body process need not load scipy)
     return sp.bsr_matrix((np.asarray(A.data), np.asarray(A.indices), np.asarray(A.indptr)), shape=(n * d, n * d))
 
 
-def _block_matrix(A: sp.spmatrix, d: int):
+def _block_matrix(A, d: int):
+    import scipy.sparse as sp  # only several bodies need it (a one-body process need not load scipy)
     B = sp.bsr_matrix(A, blocksize=(d, d))
     B.sort_indices()
     cls = _core.BlockMatrix2D if d == 2 else _core.BlockMatrix3D
@@ -607,7 +619,8 @@ def _block_matrix(A: sp.spmatrix, d: int):
     return cls(n, n, B.indptr.astype(np.int64), B.indices.astype(np.int64), np.ascontiguousarray(B.data))
 
 
-def _scalar_transfer(P: sp.csr_matrix) -> Transfer:
+def _scalar_transfer(P) -> Transfer:
+    import scipy.sparse as sp  # only several bodies need it (a one-body process need not load scipy)
     P = sp.csr_matrix(P)
     P.eliminate_zeros()
     P.sort_indices()

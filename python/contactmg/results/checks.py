@@ -45,7 +45,7 @@ def contact_conditions(problem, result) -> Dict[str, float]:
     sl = to_local(Q, r[c.nodes])
     # a tangential component fixed by a Dirichlet condition takes no part in friction: its force is a reaction
     if len(c.nodes):
-        tied = problem.solver.frame_fixed.astype(bool)
+        tied = problem.solver.core.frame_fixed.astype(bool)
         ul[tied], sl[tied] = 0.0, 0.0
     # Forces are measured against the force scale of the problem: the largest contact force, support
     # reaction or load. A body that carries no force at all (pushed onto nothing, it only translates)

@@ -11,7 +11,7 @@ from __future__ import annotations
 from typing import Optional
 
 from ..model.problem import Problem
-from .options import BUILD_FIELDS, SolverOptions, options_from
+from .options import BUILD_FIELDS, SolverOptions, for_method, options_from
 from .solver import Solver
 
 
@@ -19,9 +19,15 @@ def _problem_solver(self) -> Solver:
     """The Solver kept by this problem for problem.solve (built on first use with the problem's
     default options)."""
     kept = self.__dict__.get("_kept_solver")
-    if kept is None:
-        kept = self.__dict__["_kept_solver"] = Solver(self, getattr(self, "default_options", None))
+    wanted = options_from(self.default_options)
+    if kept is None or _rebuild(kept, wanted):
+        kept = self.__dict__["_kept_solver"] = Solver(self, wanted)
     return kept
+
+
+def _rebuild(solver: Solver, options: SolverOptions) -> bool:
+    """Do `options` ask for other build-time options than `solver` was built with?"""
+    return any(getattr(options, k) is not None and getattr(options, k) != getattr(solver._given, k) for k in BUILD_FIELDS)
 
 
 def _problem_solve(self, method: Optional[str] = None, options=None, *, u0=None, progress=None, reference=None,
@@ -32,12 +38,10 @@ def _problem_solve(self, method: Optional[str] = None, options=None, *, u0=None,
     Solver(problem).solve(options=SolverOptions(method="nmg", tol=1e-10)). A solve that asks for
     other build-time options (ordering, local_smoothing, release_hierarchy) builds the kept solver
     again. Method "linear" with `reference` (a ContactResult) takes that result's contact state."""
-    base = options_from(getattr(self, "default_options", None) if options is None else options)
-    if method is not None:
-        option_fields["method"] = method
-    opts = base.replace(**option_fields) if option_fields else base
+    base = options_from(self.default_options if options is None else options)
+    opts = for_method(base, base.method if method is None else method, **option_fields)
     solver = _problem_solver(self)
-    if any(getattr(opts, k) is not None and getattr(opts, k) != getattr(solver._given, k) for k in BUILD_FIELDS):
+    if _rebuild(solver, opts):
         solver = self.__dict__["_kept_solver"] = Solver(self, opts)
     if opts.method == "linear" and reference is not None:
         return solver.solve_known_state(reference, opts, progress=progress, error_reference=error_reference)

@@ -20,7 +20,7 @@ from typing import Callable, List, Optional, Sequence
 import numpy as np
 
 from ..model.problem import Dirichlet, Problem, assemble_load, dirichlet_arrays
-from .options import INT32_MAX, METHODS, options_from
+from .options import INT32_MAX, METHODS, for_method, options_from
 from .solver import Solver
 from ..results.result import SLIP, STICK, ContactResult
 
@@ -136,7 +136,7 @@ class LoadPath:
         if method == "fixed-point" and p.friction.law != "coulomb":
             raise ValueError("the fixed-point method (Algorithm 1) needs Coulomb friction")
         base = options_from(getattr(p, "default_options", None) if options is None else options)
-        opts = base.replace(method=method, **option_fields)
+        opts = for_method(base, method, **option_fields)
         if progress is not None and not callable(progress):
             raise ValueError(f"progress must be a callable of (step, result), got {progress!r}")
         t_path = time.perf_counter()

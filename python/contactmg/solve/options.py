@@ -180,6 +180,19 @@ class SolverOptions:
         return out
 
 
+SWITCHES = ("petrov_galerkin", "upwind_contact_sweep", "projected_coarse_correction")
+
+
+def for_method(base: SolverOptions, method: str, **fields) -> SolverOptions:
+    """`base` with `method` and `fields`: Algorithm 2's switches that `base` holds (a problem's
+    defaults) are dropped for another method, whose solves they do not concern; given in `fields`,
+    they are checked."""
+    if method not in ("nmg", "linear"):
+        for k in SWITCHES:
+            fields.setdefault(k, None)
+    return base.replace(method=method, **fields)
+
+
 def options_from(options=None, **fields) -> SolverOptions:
     """A SolverOptions from None, a SolverOptions or a dict, with `fields` set on top (TypeError for
     an unknown field)."""

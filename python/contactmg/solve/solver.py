@@ -14,6 +14,16 @@ from ..results.result import ContactResult
 from .options import BUILD_FIELDS, SolverOptions, options_from, resolve_options
 
 
+def memory_report(problem: Problem, core=None) -> dict:
+    """Bytes held now by `problem` and a built `core` (None: none yet), by owner: mesh_hierarchy,
+    transfers, problem_vectors, python_matrix, core, and their sum, total."""
+    h = problem.hierarchy.memory_bytes()
+    out = {"mesh_hierarchy": h["meshes"], "transfers": h["transfers"], "problem_vectors": problem.vector_bytes(),
+           "python_matrix": problem.matrix_bytes(), "core": int(core.memory_bytes()) if core is not None else 0}
+    out["total"] = sum(out.values())
+    return out
+
+
 class Solver:
     """The core solver of `problem` (a Problem) with `options` (a SolverOptions, a dict of its
     fields, or None: the defaults), built once here. Options fixed at the build (ordering,
@@ -38,12 +48,12 @@ class Solver:
 
     # -- building -------------------------------------------------------------------------------
     def _build(self, law: str, options: SolverOptions, frame_fixed=None, frame_values=None, load=None,
-               take_matrix: bool = False):
+               take_matrix: bool = False, fixed_values=None):
         p, c = self.problem, self.problem.contact
         cls = _core.ContactSolver2D if p.mesh.dim == 2 else _core.ContactSolver3D
         build = dict(cycle=options.cycle, nu1=options.nu1, nu2=options.nu2, ordering=options.ordering)
         A, taken = p.take_matrix() if take_matrix else (p.A, False)
-        core = cls(A, p.load if load is None else load, p.fixed, p.fixed_values, c.nodes, c.normals, c.gaps,
+        core = cls(A, p.load if load is None else load, p.fixed, p.fixed_values if fixed_values is None else fixed_values, c.nodes, c.normals, c.gaps,
                    p.coefficients, law, [t.as_tuple() for t in p.transfers], build,
                    frame_fixed=frame_fixed, frame_values=frame_values, take_matrix=taken)
         if p.tied_correction and law != "linear":
@@ -76,9 +86,18 @@ class Solver:
         other.options = resolve_options(self.problem, other._given)
         return other
 
-    def memory_bytes(self) -> int:
-        """Bytes held by the built core (matrices, prolongations, vectors)."""
-        return int(self.core.memory_bytes())
+    def new_core(self, load: Optional[np.ndarray] = None, fixed_values: Optional[np.ndarray] = None):
+        """A further core solver of the problem with this solver's build options (the problem's
+        matrix copied, not taken over), with its own `load` and `fixed_values` where given: for
+        comparisons against the kept core."""
+        return self._build(self.problem.law, self.options, load=load, fixed_values=fixed_values)
+
+    def memory_bytes(self) -> dict:
+        """Bytes held now, by owner: the hierarchy's meshes and transfers (Python), the problem's
+        vectors (load, Dirichlet data, contact boundary, coefficients), an assembled matrix held in
+        Python, and the built core (matrices, prolongations, vectors); "total" is their sum. Nothing
+        is made again to count it (a released hierarchy stays so)."""
+        return memory_report(self.problem, self.core)
 
     # -- solving --------------------------------------------------------------------------------
     def solve(self, u0: Optional[np.ndarray] = None, *, load: Optional[np.ndarray] = None,
