@@ -1,4 +1,4 @@
-"""The 3D commands `contactmg sphere` and `contactmg cork` (DESIGN sections 9 and 10): JSON keys,
+"""The 3D commands `contactmg sphere` and `contactmg cork`: JSON keys,
 exit statuses, the plots drawn from the right data."""
 import json
 import subprocess

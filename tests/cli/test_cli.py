@@ -1,4 +1,4 @@
-"""The command line contract (DESIGN section 9): JSON keys, exit statuses, one-line errors."""
+"""The command line contract: JSON keys, exit statuses, one-line errors."""
 import json
 import os
 import signal

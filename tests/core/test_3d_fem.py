@@ -1,4 +1,4 @@
-"""3D finite elements (issue 10): element stiffness against closed forms, the patch test, and a
+"""3D finite elements: element stiffness against closed forms, the patch test, and a
 manufactured solution's convergence rates under 3D refinement."""
 import numpy as np
 import pytest

@@ -1,4 +1,4 @@
-"""The pieces of the compiled core (issue 9): the friction Hessian slot, the bound restriction,
+"""The pieces of the compiled core: the friction Hessian slot, the bound restriction,
 rows to smooth per level, per-solve cycle options, the progress callback, the frames returned with
 the result, and the one table of cell types."""
 import numpy as np
@@ -46,7 +46,7 @@ def test_friction_hessian_vanishes_with_one_tangential_direction():
     assert np.all(_core.testing.friction_hessian_3D(2.0, np.array([0.3, 0.0, 0.0])) == 0)  # sticking: no Hessian
 
 
-# -- bound restriction (DESIGN section 4) ------------------------------------------------------
+# -- bound restriction ------------------------------------------------------
 def prolongation(n_fine, rows):
     """rows: per fine node a list of (coarse node, weight)."""
     ptr = np.cumsum([0] + [len(r) for r in rows]).astype(np.int64)

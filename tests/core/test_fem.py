@@ -1,4 +1,4 @@
-"""Finite-element core: assembly, loads, refinement and transfer (issue 2)."""
+"""Finite-element core: assembly, loads, refinement and transfer."""
 import numpy as np
 import pytest
 import scipy.sparse as sp

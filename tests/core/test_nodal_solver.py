@@ -1,4 +1,4 @@
-"""The exact nodal solver (DESIGN section 3) against independent minimizations of the local problem
+"""The exact nodal solver against independent minimizations of the local problem
     min 1/2 x^T B x - b^T x + s |x_T|  subject to x_n <= g."""
 import itertools
 

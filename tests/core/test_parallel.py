@@ -1,4 +1,4 @@
-"""Issue 15: coloured Gauss-Seidel sweeps on threads. The result does not depend on the thread
+"""Coloured Gauss-Seidel sweeps on threads. The result does not depend on the thread
 count (bit for bit), the coloured order solves the same problem as the lexicographic one in about
 as many cycles, and the fine matrix is held once (the core takes the assembled one over)."""
 import json

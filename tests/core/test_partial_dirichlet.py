@@ -1,5 +1,5 @@
 """A contact node with some Dirichlet components keeps its contact condition in the free
-directions (issue 16, item 1): symmetry half models, rollers, and the errors for prescriptions
+directions: symmetry half models, rollers, and the errors for prescriptions
 that penetrate or that are not aligned with the contact frame."""
 import numpy as np
 import pytest

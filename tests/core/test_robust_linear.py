@@ -1,4 +1,4 @@
-"""Robust linear corrections of TNNMG (issue 14, part 2): the algebraic line Gauss-Seidel
+"""Robust linear corrections of TNNMG: the algebraic line Gauss-Seidel
 (cpp/mg/line_smoother.hpp), the truncated linear cycle on the fine level and PCG with it as the
 preconditioner (cpp/mg/truncated_linear_cycle.hpp, cpp/mg/pcg.hpp)."""
 

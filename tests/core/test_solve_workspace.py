@@ -1,4 +1,4 @@
-"""Issue 15, the lead's "fine vector of page faults every cycle": a solver keeps the fine vectors of
+"""The lead's "fine vector of page faults every cycle": a solver keeps the fine vectors of
 its cycles (r, u_old and the Anderson history of settled Coulomb cycles) across solves, so a later
 solve on the same solver first-touches no new fine pages inside its cycles (a fresh step per solve
 allocated 8 fine vectors again: the Anderson slots' 6 in the cycles where the history fills, whose

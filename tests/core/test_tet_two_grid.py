@@ -1,4 +1,4 @@
-"""Issue 10, tetrahedra: the P1 elasticity multigrid on Kuhn cubes against independent scipy
+"""Tetrahedra: the P1 elasticity multigrid on Kuhn cubes against independent scipy
 computations. The core's matrices and transfers are exact (independent P1 assembly, Galerkin =
 rediscretized, rigid-body modes reproduced); the W- and F-cycles reach the rate of the exact
 two-grid method with the same point-block Gauss-Seidel smoother on every level (before, the fine

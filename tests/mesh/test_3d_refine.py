@@ -1,4 +1,4 @@
-"""3D uniform refinement (issue 10): node counts, volume, boundary facets and tags, the projection
+"""3D uniform refinement: node counts, volume, boundary facets and tags, the projection
 onto curved surfaces, interpolation, shape stability of Bey's red refinement."""
 import itertools
 

@@ -1,4 +1,4 @@
-"""Newest-vertex bisection of tetrahedra (Arnold-Mukherjee-Pouly marked bisection, issue 11 in 3D)
+"""Newest-vertex bisection of tetrahedra (Arnold-Mukherjee-Pouly marked bisection)
 and adaptive tetrahedral hierarchies: conformity after the closure, volumes, nestedness, shape
 regularity under refinement of a point, the boundary projection, the adaptive sphere."""
 import json

@@ -1,4 +1,4 @@
-"""Issue 11's cycle-growth diagnosis: the barycentric prolongation at projected boundary nodes
+"""Cycle-growth diagnosis: the barycentric prolongation at projected boundary nodes
 (contactmg.mesh.hierarchy.boundary_interpolation), the monotone bound restriction through its negative
 weights, and the level-independence of the linear multigrid rate on the adaptive Hertz levels."""
 import numpy as np

@@ -1,4 +1,4 @@
-"""Issue 15, memory: what a solve keeps in Python. Refined meshes and transfers hold 32-bit ids; a
+"""Memory: what a solve keeps in Python. Refined meshes and transfers hold 32-bit ids; a
 problem that releases its hierarchy once the core solver is built solves to the same bits, and its
 results, VTU output and contact check need nothing of what was released; the released levels come
 back identical when asked for; the accounting by owner adds up. (The figures themselves come from

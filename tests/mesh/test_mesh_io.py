@@ -1,4 +1,4 @@
-"""Mesh type, generators and meshio round trips (issue 2)."""
+"""Mesh type, generators and meshio round trips."""
 import meshio
 import numpy as np
 import pytest

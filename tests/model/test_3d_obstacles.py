@@ -1,4 +1,4 @@
-"""Curved rigid obstacles (issue 10): closest-point gaps and normals against closed forms, in frames
+"""Curved rigid obstacles: closest-point gaps and normals against closed forms, in frames
 not aligned with the axes."""
 import numpy as np
 import pytest

@@ -1,4 +1,4 @@
-"""3D dual mortar (surface segment intersection) and two elastic bodies in contact in 3D (issue 13)."""
+"""3D dual mortar (surface segment intersection) and two elastic bodies in contact in 3D."""
 import json
 import subprocess
 import sys

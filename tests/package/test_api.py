@@ -1,4 +1,4 @@
-"""Issue 9, the Python API: solver options belong to the solve (no re-assembly to change the
+"""The Python API: solver options belong to the solve (no re-assembly to change the
 cycle), the result carries its contact nodes and frames, frames are built in one Python place, and
 results do not import the problem module."""
 import ast

@@ -1,4 +1,4 @@
-"""Plot helpers (issue 4): the artists hold the data; table1() and `contactmg table1`."""
+"""Plot helpers: the artists hold the data; table1() and `contactmg table1`."""
 import argparse
 import json
 import subprocess

@@ -1,4 +1,4 @@
-"""3D contact with Coulomb friction (issue 10): the exact sliding layer, the nodal frame round trip,
+"""3D contact with Coulomb friction: the exact sliding layer, the nodal frame round trip,
 Algorithm 1 = Algorithm 2, the sphere against Hertz, the cork with stick and slip, the independent
 check of the contact conditions, meshes read from gmsh files, bad 3D input."""
 import meshio

@@ -1,4 +1,4 @@
-"""Issue 10: the 3D hierarchies stay non-degenerate and their linear multigrid contracts at a
+"""The 3D hierarchies stay non-degenerate and their linear multigrid contracts at a
 bounded rate: the shortest interior diagonal of the tetrahedra's red refinement, the cork's coarse
 mesh with cells of aspect ratio about 1."""
 import itertools

@@ -1,4 +1,4 @@
-"""Adaptive hierarchies (issue 11): newest-vertex bisection, the hierarchical estimator, bulk
+"""Adaptive hierarchies: newest-vertex bisection, the hierarchical estimator, bulk
 marking, MeshHierarchy.adaptive and the adaptive Hertz hierarchy."""
 import numpy as np
 import pytest
@@ -340,9 +340,9 @@ def test_algorithm2_on_adaptive_levels_for_the_paper_frictions(F, hertz_adaptive
     """Levels 3-9 of the adaptive hierarchy (59k dofs): every Algorithm 2 result converged and
     verified by the independent check, Algorithm 1 = Algorithm 2 where both converge (level 7); for
     F <= 2 cycles bounded (<= 25) and within a spread of 4 from level 5 on. Not met, so not
-    asserted: issue 11's spread <= 4 from level 3 on (measured 2026-12-02 with the default
+    asserted: the spread <= 4 from level 3 on (measured 2026-12-02 with the default
     omega = 1.3: levels 3-9 spread 3-5 for F <= 2, 5 at F = 0.4; level 3, a 3-level hierarchy
-    with an exact 28-node coarse solve, needs 9-12 cycles; docs/history/adaptive.md, "Issue 11, third part"). With
+    with an exact 28-node coarse solve, needs 9-12 cycles; 0018-adaptive-estimator). With
     plain Gauss-Seidel (omega = 1) F = 0.4 failed the level-5-on spread here (12 / 15 / 17)."""
     h = hertz_adaptive_9
     cycles = []

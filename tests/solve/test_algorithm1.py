@@ -1,4 +1,4 @@
-"""Algorithm 1 (fixed point in the normal stresses) against Algorithm 2 (issue 4)."""
+"""Algorithm 1 (fixed point in the normal stresses) against Algorithm 2."""
 import numpy as np
 import pytest
 
@@ -76,7 +76,7 @@ def test_fixed_point_slows_down_for_f_5_on_finer_levels():
     print("F = 5 outer iterations", out, "nmg cycles", cyc)
     assert out[7] > out[3], out
     # bounded, not growing like Algorithm 1 (measured 11 on level 3 and 17 on level 7 with the
-    # settled cycles mixed; 14 and 19 before): within issue 14's target with room
+    # settled cycles mixed; 14 and 19 before): within the target with room
     assert cyc[7] <= 20, cyc
 
 

@@ -1,4 +1,4 @@
-"""Contact with friction: truncated monotone multigrid and Algorithm 2 (issue 3)."""
+"""Contact with friction: truncated monotone multigrid and Algorithm 2."""
 import numpy as np
 import pytest
 

@@ -1,4 +1,4 @@
-"""Algorithm 2 at large friction on a graded mesh (issue 14 part 1): cases that stalled in a limit
+"""Algorithm 2 at large friction on a graded mesh: cases that stalled in a limit
 cycle of the nonlinear smoother or contracted slowly once the contact state had settled now converge
 and are verified by the independent check (contactmg.results.checks), and the settled-cycle acceleration
 leaves the solution where Algorithm 1 and the unaccelerated method put it."""
@@ -21,7 +21,7 @@ def energy_norm(p, v):
 @pytest.mark.parametrize("F", [20.0, 40.0])
 def test_adaptive_level_9_large_friction_converges_and_verifies(F, adaptive_9):
     """Adaptive Hertz level 9 (59k dofs): F = 20 and 40 stalled before (the cycle returned to an
-    iterate that one more sweep moved by 1.8 and 2.7e-1 relative violation; issue 11's note). Now:
+    iterate that one more sweep moved by 1.8 and 2.7e-1 relative violation). Now:
     converged, confirmed by the sweep check, every nodal condition met, in at most 30 cycles."""
     p = hertz_problem(friction=F, hierarchy=adaptive_9.truncated(9), coulomb_at_zero=True)
     r = p.solve(max_cycles=100)
@@ -35,7 +35,7 @@ def test_adaptive_level_9_large_friction_converges_and_verifies(F, adaptive_9):
 def test_settled_slow_case_within_the_target(adaptive_9):
     """Adaptive level 7 at F = 8 took 41 cycles (Algorithm 1: 59 outer iterations): once the contact
     state has settled the cycle contracted by about 0.8, because the coarse problem freezes the
-    friction bound F |s_n| of the sliding nodes. Issue 14's target (<= 25 cycles) holds."""
+    friction bound F |s_n| of the sliding nodes. The target (<= 25 cycles) holds."""
     p = hertz_problem(friction=8.0, hierarchy=adaptive_9.truncated(7), coulomb_at_zero=True)
     r = p.solve()
     assert r.converged, r.status

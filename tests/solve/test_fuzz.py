@@ -1,4 +1,4 @@
-"""Random and malformed input never crashes or hangs: only ValueError/TypeError (issue 5)."""
+"""Random and malformed input never crashes or hangs: only ValueError/TypeError."""
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings

@@ -1,4 +1,4 @@
-"""Load paths with the incremental Coulomb law (issue 12, DESIGN section 12): the one-step path is
+"""Load paths with the incremental Coulomb law: the one-step path is
 today's solve; the incremental path against its own properties (Coulomb's law on the slip
 increment, full slip under a large shear, the self-similar stick zone of Spence's incremental
 normal loading); the warm start reaches the same solution as a cold start; the time series reads
@@ -141,8 +141,7 @@ def test_stick_fraction_is_self_similar_under_incremental_normal_loading():
         assert 0 < b < a
         frac.append((b, a))
     ratios = [b / a for b, a in frac]
-    # the incremental stick zone is not the one-step one (DESIGN section 6: the paper's single step
-    # from the reference configuration sticks on a much smaller zone)
+    # the incremental stick zone is not the one-step one
     one = p.solve(tol=1e-10)
     assert res.last.halfwidth((STICK,)) > one.halfwidth((STICK,)) + 2 * width
     # constant up to the resolution of the zone edges (one boundary element at each edge)

@@ -1,4 +1,4 @@
-"""Issue 11, second part: local smoothing on adaptive hierarchies, thinned hierarchies, Algorithm 1's
+"""Local smoothing on adaptive hierarchies, thinned hierarchies, Algorithm 1's
 stop when it does not contract, and the adaptive Table 1 (parallel runs, CLI default)."""
 import json
 import subprocess

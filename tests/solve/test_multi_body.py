@@ -1,4 +1,4 @@
-"""Several bodies and contact pairs through the dual mortar transformation (issue 13): the exact
+"""Several bodies and contact pairs through the dual mortar transformation: the exact
 slip of two sliding blocks, a patch test through two non-matching interfaces, level-independent
 cycle counts."""
 import numpy as np
@@ -176,7 +176,7 @@ def _cycles(levels, F, E2, nu2, method, **kw):
 
 def test_two_body_cycles_are_flat_over_levels_unequal_materials():
     """E2 = 2 E1, F = 0.4: Algorithm 2's restricted bounds alone hold back the common motion of the
-    interface (18/20/25/33 cycles on levels 3-6 without the tied correction, issue 13); with the
+    interface (18/20/25/33 cycles on levels 3-6 without the tied correction); with the
     tied coarse correction (the default) nmg needs about as many cycles on levels 3-5, and its
     solution is tnnmg's and that of nmg without the tied correction."""
     from contactmg.examples.cylinders import cylinders_problem

@@ -1,4 +1,4 @@
-"""Linear multigrid: contraction per cycle on the rectangle and on the Hertz hierarchy (issue 2)."""
+"""Linear multigrid: contraction per cycle on the rectangle and on the Hertz hierarchy."""
 import numpy as np
 import pytest
 
@@ -79,7 +79,7 @@ def test_linear_solve_reaches_tolerance_and_matches_direct_solve():
 
 @pytest.mark.slow
 def test_contraction_table_levels_3_to_8():
-    """The full table of issue 2 (about two minutes): contraction per cycle on levels 3..8 for
+    """The full table (about two minutes): contraction per cycle on levels 3..8 for
     V(1,1), V(2,2), V(3,3), W(3,3) and the default F(3,3), on the rectangle and the Hertz half disk
     (triangles). More smoothing contracts faster on every level; the default stays <= 0.3 on Hertz
     and every variant stays bounded (no rise of more than 0.1 from level 5 to level 8)."""

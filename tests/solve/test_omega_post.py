@@ -1,4 +1,4 @@
-"""The post-smoothing sweeps' own over-relaxation (issue 11, fifth part): CycleOptions::omega_post,
+"""The post-smoothing sweeps' own over-relaxation: SolverOptions.omega_post,
 solve(omega_post=...) and ContactProblem.smoother_omega_post. Off by default; with omega = 1 before
 the coarse correction and 1.7 after it the linear rate on the adaptive Hertz levels falls well below
 the symmetric default's at the same cost, the monotone cycles stay monotone and Algorithm 2 reaches

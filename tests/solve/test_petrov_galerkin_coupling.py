@@ -1,5 +1,5 @@
-"""Algorithm 2's cycles with the sliding nodes' Petrov-Galerkin coupling on level L-1 (issue 11,
-seventh and tenth parts): CycleOptions::petrov_galerkin, solve(petrov_galerkin=True),
+"""Algorithm 2's cycles with the sliding nodes' Petrov-Galerkin coupling on level L-1
+(0006-petrov-galerkin-coupling): SolverOptions.petrov_galerkin, solve(petrov_galerkin=True),
 ContactProblem.petrov_galerkin. On by default for Coulomb friction on 2D adaptive
 hierarchies (with the post-smoothing's own omega, DEFAULT_OMEGA_POST_ADAPTIVE), off on uniform
 ones and in 3D. With it on the solve reaches the same solution and passes the independent check,
@@ -138,7 +138,7 @@ def tresca_problem(level):
 def test_3d_coulomb_same_solution():
     # the d = 3 template: sliding nodes' Hessian blocks update the levels every cycle, the overlay
     # with them. It was refused in 3D while a second solve with it gave run-to-run different bits and
-    # once (stop 24's CI) another solution: the coarsest solver's low-rank update wrote out of bounds
+    # once (in CI) another solution: the coarsest solver's low-rank update wrote out of bounds
     # (mg/coarsest_solver.hpp), and a solve began from the levels the one before had left.
     h = sphere.sphere_adaptive_hierarchy(3, friction=0.4)
     for F in (0.1, 0.4):
@@ -162,7 +162,7 @@ def adaptive7():
 
 def test_fallback_refuses_a_growing_cycle(adaptive7):
     # adaptive level 7 at F = 8: two isolated sliding nodes at the contact edge, where the coupling's
-    # oblique coarse correction amplifies their mode (docs/history/adaptive.md, sixth part: two-grid
+    # oblique coarse correction amplifies their mode (0006-petrov-galerkin-coupling: two-grid
     # 1.94 against 0.64); a cycle with it grows and is refused
     p = hertz_problem("triangle", 7, 8.0, coulomb_at_zero=True, hierarchy=adaptive7)
     off = p.solve(threads=1, petrov_galerkin=False)
@@ -184,7 +184,7 @@ def test_fallback_refuses_a_growing_cycle(adaptive7):
 
 def test_fallback_judges_cycles_with_a_state_change(adaptive7):
     # adaptive level 7 at F = 20: the first coupled cycle (the second) also changes the contact state
-    # and does not shrink the correction. Until stop 26 such a cycle was not judged (the Anderson
+    # and does not shrink the correction. Before, such a cycle was not judged (the Anderson
     # restart test returned first); now it is refused like any other: the iterate goes back (the
     # energy is the cycle before's), the cycle reports the smallest step before it (a refused step
     # that grew by 1e10 read as divergence), and the solve goes on without the coupling.

@@ -1,4 +1,4 @@
-"""Numerical stress tests (issue 5): extreme friction, near-incompressibility, no contact, full
+"""Numerical stress tests: extreme friction, near-incompressibility, no contact, full
 contact, initial penetration, anisotropic cells. Each asserts convergence or a reported failure,
 no NaN, and the contact conditions where a solution is expected."""
 import numpy as np

@@ -1,6 +1,6 @@
 """The Anderson mixing of settled cycles (cpp/steps/settled_anderson.hpp) keeps its history in
 kDepth slots of two vectors, the new pair formed over the last iterate and the last iterate over
-the oldest pair (issue 15). The iterates must be those of the textbook layout, computed here
+the oldest pair. The iterates must be those of the textbook layout, computed here
 independently with numpy: history lists of dx, dg, the oldest dropped at depth 3, a restart when
 the mixed step did not lower |G(x) - x|, a refused candidate leaving G(x)."""
 import numpy as np

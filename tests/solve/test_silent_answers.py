@@ -1,4 +1,4 @@
-"""Issue 16: answers that were wrong without a word (all items but 1, partial Dirichlet on contact
+"""Answers that were wrong without a word (all items but 1, partial Dirichlet on contact
 nodes). Each case: the setup that used to pass silently now gets a clear error or warning, or the
 check/measure that used to be wrong now holds -- and the valid neighbour of each case still works."""
 import subprocess

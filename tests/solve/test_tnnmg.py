@@ -1,4 +1,4 @@
-"""Truncated nonsmooth Newton multigrid (method="tnnmg", issue 14): agreement with Algorithm 2,
+"""Truncated nonsmooth Newton multigrid (method="tnnmg"): agreement with Algorithm 2,
 the independent contact check, the decrease of the frozen-bound energy by every correction and
 line search, monotone energy for the convex laws, 3D, and the command line."""
 import json

@@ -1,4 +1,4 @@
-"""Two bodies in contact through the dual mortar basis transformation (issue 13)."""
+"""Two bodies in contact through the dual mortar basis transformation."""
 import json
 import subprocess
 import sys

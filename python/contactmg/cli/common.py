@@ -82,7 +82,7 @@ def _float(name):
 
 
 def add_path_arguments(p) -> None:
-    """The load path options (issue 12; cli_path.py runs them)."""
+    """The load path options (cli_path.py runs them)."""
     p.add_argument("--steps", type=_positive_int("--steps", 1, 100000), default=None,
                    help="load path: the loading in N equal increments (incremental Coulomb law)")
     p.add_argument("--shear", type=_float("--shear"), default=None,
@@ -96,6 +96,7 @@ def add_path_arguments(p) -> None:
 
 
 def add_thread_options(p) -> None:
+    """Add --threads and --ordering to a command's parser."""
     p.add_argument("--threads", type=_positive_int("--threads", 0, 4096), default=0,
                    help="threads of the sweeps and products (default 0: all cores; the result does not depend on it)")
     p.add_argument("--ordering", choices=["lexicographic", "coloured"], default=None,
@@ -169,6 +170,7 @@ def peak_rss_mb() -> float:
 
 
 def hertz_report(args, problem, result) -> dict:
+    """The JSON report of a 2D contact solve (the command-line contract's keys)."""
     from ..examples import hertz
     from ..results.result import SLIP, STICK
 
@@ -197,7 +199,7 @@ def hertz_report(args, problem, result) -> dict:
         "threads": result.extra.get("threads"), "ordering": result.extra.get("ordering"),
         "hierarchy": problem.hierarchy.kind,
     }
-    if args.method == "tnnmg" and "linear_iterations" in result.history:  # issue 14: its linear correction
+    if args.method == "tnnmg" and "linear_iterations" in result.history:  # its linear correction
         out["linear_correction"] = getattr(args, "linear", None) or "pcg"
         out["linear_cycles"] = int(sum(result.history["linear_iterations"]))
     if problem.hierarchy.estimated_error:

@@ -69,6 +69,7 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def run_hertz(args) -> int:
+    """The hertz command: solve the Hertz benchmark and report; returns the exit status."""
     from ..cli import path as cli_path
     from ..examples.hertz import hertz_problem
 
@@ -112,6 +113,7 @@ def run_hertz(args) -> int:
 
 
 def main(argv: Optional[List[str]] = None) -> int:
+    """The command line: parse `argv` and run the command; returns the exit status."""
     parser = _parser()
     args = parser.parse_args(argv)
     try:

@@ -1,5 +1,5 @@
 """The load path options of the solve commands (`--steps N`, `--shear S --shear-steps M`,
-`--series PATH.pvd`, `--zone-plot PATH`; DESIGN section 9, issue 12): the path of a two-phase
+`--series PATH.pvd`, `--zone-plot PATH`;): the path of a two-phase
 loading on the command's loaded facets, the JSON `steps` list, the time series and the zone plot.
 The top-level JSON keys describe the last step."""
 from __future__ import annotations
@@ -10,6 +10,7 @@ from ..solve.loadpath import two_phase_path
 
 
 def wanted(args) -> bool:
+    """Does the command line ask for a load path (--steps)?"""
     return getattr(args, "steps", None) is not None or getattr(args, "shear", None) is not None \
         or getattr(args, "pull_back", False)
 
@@ -72,6 +73,7 @@ def report(args, path_result, out: dict, zone: Optional[Callable] = None, radii:
 
 
 def print_steps(out: dict, stream) -> None:
+    """Print one line per load step."""
     p = out["path"]
     print(f"  load path: {p['steps_solved']}/{p['steps']} steps, {p['total_cycles']} cycles, {p['seconds']:.2f} s; "
           "cycles per step " + " ".join(str(r["cycles"]) for r in out["steps"]), file=stream)

@@ -1,4 +1,4 @@
-"""The 3D commands `contactmg sphere` and `contactmg cork` (DESIGN sections 9 and 10), registered by
+"""The 3D commands `contactmg sphere` and `contactmg cork`, registered by
 cli.py; the JSON keys of `contactmg hertz` plus their own."""
 from __future__ import annotations
 
@@ -34,6 +34,7 @@ def _common(p, levels_default):
 
 
 def add_parsers(sub) -> None:
+    """Add the sphere and cork commands."""
     from ..examples import cork
     from ..examples import sphere
 
@@ -107,6 +108,7 @@ def _finish(args, report, result, label, path=None) -> int:
 
 
 def run_sphere(args) -> int:
+    """The sphere command: solve the 3D half ball against a plane and report; returns the exit status."""
     from ..examples import sphere
 
     from . import path as cli_path
@@ -179,6 +181,7 @@ def cork_report(args, problem, result) -> dict:
 
 
 def run_cork(args) -> int:
+    """The cork command: solve the cork pushed into a bottle neck and report; returns the exit status."""
     from ..examples import cork
 
     args.cell = "hexahedron"

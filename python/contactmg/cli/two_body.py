@@ -14,6 +14,7 @@ from . import three_d as cli_3d
 
 # -- cylinders ---------------------------------------------------------------------------------
 def add_cylinders_parser(sub):
+    """Add the cylinders command."""
     c = sub.add_parser("cylinders", help="two elastic half-disks in contact (dual mortar, non-matching meshes)")
     c.add_argument("--levels", type=cli._positive_int("--levels", 1, cli.MAX_LEVELS), default=5,
                    help="levels in all; level 1 is the coarse mesh")
@@ -38,6 +39,7 @@ def add_cylinders_parser(sub):
 
 
 def run_cylinders(args) -> int:
+    """The cylinders command: solve two cylinders in contact and report; returns the exit status."""
     if not (-1.0 < args.nu2 < 0.5):
         raise ValueError(f"--nu2: Poisson's ratio must lie in (-1, 0.5), got {args.nu2}")
     problem = cylinders.cylinders_problem(args.levels, args.friction, args.E2, args.nu2,
@@ -83,6 +85,7 @@ def run_cylinders(args) -> int:
 
 # -- spheres -----------------------------------------------------------------------------------
 def add_spheres_parser(sub):
+    """Add the spheres command."""
     c = sub.add_parser("spheres", help="two elastic hemispheres in contact (3D dual mortar, non-matching meshes)")
     c.add_argument("--cell", choices=["tetra", "hexahedron"], default="hexahedron", help="tetrahedra or hexahedra")
     c.add_argument("--levels", type=cli._positive_int("--levels", 1, 7), default=spheres.DEFAULT_LEVELS,
@@ -110,6 +113,7 @@ def add_spheres_parser(sub):
 
 
 def run_spheres(args) -> int:
+    """The spheres command: solve two half balls in contact and report; returns the exit status."""
     if not (-1.0 < args.nu2 < 0.5):
         raise ValueError(f"--nu2: Poisson's ratio must lie in (-1, 0.5), got {args.nu2}")
     problem = spheres.spheres_problem(args.cell, args.levels, args.friction, args.E2, args.nu2, args.displacement,

@@ -1,4 +1,4 @@
-"""The cork in the bottle neck (the seed paper's Figure 2, right; DESIGN section 10).
+"""The cork in the bottle neck (the seed paper's Figure 2, right).
 
 A cylindrical cork, radius 12 and length 40 (millimetres: a wine cork), axis z, bottom z = 0, sits
 in a rigid neck: a cylinder of radius 12.05 (a little clearance) above z = 20 that narrows by a
@@ -35,7 +35,7 @@ CLEARANCE, INTERFERENCE, TAPER_TOP = 0.05, 0.25, 20.0
 PUSH = 0.2
 DEFAULT_LEVELS = 3
 # The coarse mesh: a 2K x 2K block in the cross-section, one ring layer out to the circle (an O-grid:
-# no collapsed cells at the axis), AXIAL_LAYERS layers along the axis. Measured (issue 10): 8 layers
+# no collapsed cells at the axis), AXIAL_LAYERS layers along the axis. Measured: 8 layers
 # (cells 5 mm long against 3-6 mm across) instead of 4 (10 mm) take the linear V(3,3) contraction on
 # levels 2/3 from 0.41/0.44 to 0.10/0.13 and the linear cycles from 22/25 to 11/12, but the load path
 # (`cork --steps 2`) then stops with "the coarsest-level matrix is singular" (single solves converge):

@@ -21,7 +21,7 @@ from ..solve.contact_problem import Dirichlet
 if TYPE_CHECKING:
     from ..solve.contact_problem import TwoBodyProblem
 # two_body (scipy.sparse, the mortar modules) is imported where a problem is built: the command line
-# builds this module's parser for every command, and scipy cost a `contactmg hertz` process 32 MiB (issue 15)
+# builds this module's parser for every command, and scipy cost a `contactmg hertz` process 32 MiB
 
 E, NU, RADIUS = 2000.0, 0.28, 0.4
 FACE_DISPLACEMENT = 0.005
@@ -45,6 +45,7 @@ def lower_half_disk(segments: int = 5) -> Mesh:
 def cylinders_problem(levels: int = 5, friction: float = 0.4, E2: float = E, nu2: float = NU, coulomb_at_zero=False,
                       cycle: str = "F", smooth: int = 3, upper_segments: int = 4, lower_segments: int = 5,
                       tied_correction: bool = True) -> TwoBodyProblem:
+    """Two elastic half cylinders pressed together (the two-body Hertz problem) with `levels` uniform levels and Coulomb friction `friction`."""
     if isinstance(friction, bool) or not isinstance(friction, (int, float)) or not math.isfinite(friction) or friction < 0:
         raise ValueError(f"the friction coefficient must be a finite number >= 0, got {friction!r}")
     from ..model.problem import Body, ContactPair

@@ -1,4 +1,4 @@
-"""The Hertz benchmark of the seed paper (DESIGN section 6) and Hertz's plane-strain formulas."""
+"""The Hertz benchmark of the seed paper and Hertz's plane-strain formulas."""
 from __future__ import annotations
 
 import math

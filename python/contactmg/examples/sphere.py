@@ -1,4 +1,4 @@
-"""The Hertz sphere (DESIGN section 10): the lower half of a ball of radius 0.4 centred at (0, 0, 0.4),
+"""The Hertz sphere: the lower half of a ball of radius 0.4 centred at (0, 0, 0.4),
 its flat top z = 0.4 displaced by (0, 0, -D), pressed onto the rigid plane z = 0; and Hertz's formulas
 for a sphere on a half space."""
 from __future__ import annotations

@@ -23,7 +23,7 @@ from ..solve.contact_problem import Dirichlet
 if TYPE_CHECKING:
     from ..solve.contact_problem import TwoBodyProblem
 # two_body (scipy.sparse, the mortar modules) is imported where a problem is built: the command line
-# builds this module's parser for every command, and scipy cost a `contactmg hertz` process 32 MiB (issue 15)
+# builds this module's parser for every command, and scipy cost a `contactmg hertz` process 32 MiB
 
 E, NU, RADIUS = 2000.0, 0.28, 0.4
 UPPER_CENTER, LOWER_CENTER = (0.0, 0.0, RADIUS), (0.0, 0.0, -RADIUS)

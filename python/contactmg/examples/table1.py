@@ -1,7 +1,7 @@
 """Table 1 and Figure 1 of the paper: Algorithm 1 (fixed point) and Algorithm 2 (nmg) on the Hertz
 benchmark over levels and friction coefficients.
 
-`table1(levels, frictions)` returns a dict (the JSON of `contactmg table1`, DESIGN section 9) whose
+`table1(levels, frictions)` returns a dict (the JSON of `contactmg table1`, the command-line contract) whose
 per-run lists are indexed [friction][level]:
 
     levels, frictions, cell, tol, nodes, dofs                      (nodes/dofs: one per level)

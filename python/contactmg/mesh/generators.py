@@ -32,6 +32,7 @@ class CircleProjector:
 
 
 def hertz_projector(center=(0.0, 0.4), radius=0.4) -> CircleProjector:
+    """The projector onto the Hertz benchmark's circular arc (boundary nodes of refined levels land on it)."""
     return CircleProjector(center, radius, tags=(HERTZ_ARC,))
 
 

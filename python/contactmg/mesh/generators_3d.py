@@ -194,6 +194,7 @@ def half_ball(cell: str = "hexahedron", center=(0.0, 0.0, 0.4), radius: float = 
 
 
 def ball_projector(center=(0.0, 0.0, 0.4), radius: float = 0.4) -> SphereProjector:
+    """The projector onto the half ball's spherical surface (boundary nodes of refined levels land on it)."""
     return SphereProjector(center, radius, (BALL_SURFACE,))
 
 

@@ -16,7 +16,7 @@ Projector = Callable[[np.ndarray, np.ndarray], np.ndarray]
 
 # Bytes per fine node of a whole solve (fine matrix in the solver and in Python, coarse matrices,
 # prolongations, meshes, work vectors, results), by cell type: the peak resident memory of a Python
-# solve that keeps its hierarchy (release_hierarchy off), measured at stop 21 on Hertz triangles /
+# solve that keeps its hierarchy (release_hierarchy off), measured on Hertz triangles /
 # quadrilaterals level 8 and sphere tetrahedra / hexahedra level 4 (909 / 891 / 2,065 / 3,181 B a
 # node with the interpreter's ~70 MB), times 1.5 for what a problem of another shape holds more.
 # It was 2,200 in 2D and 14,000 in 3D, 4.5x the measured 3D peak: it refused tetrahedral level 5
@@ -43,6 +43,7 @@ class Transfer:
     weight: np.ndarray
 
     def as_tuple(self) -> Tuple:
+        """The transfer as the core takes it: (n_fine, n_coarse, ptr, parent, weight)."""
         return (self.n_fine, self.n_coarse, self.ptr, self.parent, self.weight)
 
     def matrix(self):
@@ -53,6 +54,7 @@ class Transfer:
 
 
 def available_memory_bytes() -> int:
+    """The memory the system says is available now (MemAvailable), in bytes."""
     try:
         with open("/proc/meminfo") as fh:
             for line in fh:
@@ -107,7 +109,7 @@ class MeshHierarchy:
     (release_coarse) once a core solver holds its own copies of what it needs: the finest mesh
     stays (results and output need it), and `meshes` / `transfers` are made again from the coarse
     mesh, the same refinement and projection (bit for bit) the next time they are asked for. At
-    level 9 in 2D they were 66 bytes a dof of a solve's peak (issue 15)."""
+    level 9 in 2D they were 66 bytes a dof of a solve's peak."""
 
     def __init__(self, meshes: List[Mesh], transfers: Optional[List[Transfer]] = None, build_seconds: float = 0.0,
                  kind: str = "uniform", estimated_error: Optional[List[float]] = None,
@@ -141,6 +143,7 @@ class MeshHierarchy:
 
     @property
     def meshes(self) -> List[Mesh]:
+        """The meshes, coarsest first (released coarse meshes are made again when asked for)."""
         if self._meshes is None:
             self._restore()
         return self._meshes
@@ -151,6 +154,7 @@ class MeshHierarchy:
 
     @property
     def transfers(self) -> List[Transfer]:
+        """The transfers between consecutive levels, coarsest first (made again when released)."""
         if self._transfers is None:
             self._restore()
         return self._transfers
@@ -205,10 +209,12 @@ class MeshHierarchy:
 
     @property
     def finest(self) -> Mesh:
+        """The finest mesh."""
         return self._finest if self._meshes is None else self._meshes[-1]
 
     @property
     def levels(self) -> int:
+        """The number of levels."""
         return self._levels if self._meshes is None else len(self._meshes)
 
     @classmethod
@@ -324,7 +330,7 @@ def _refined(m: Mesh, r: dict, projector: Optional[Projector]) -> Tuple[Mesh, Tr
             raise ValueError(f"the boundary projector returned shape {moved.shape}, expected {(len(nb), m.dim)}")
         points[nb] = moved
     _core.check_cells(points, r["cells"], m.cell_type)
-    # 32-bit ids where they fit (issue 15): the core reads any integer array (a 64-bit copy while it
+    # 32-bit ids where they fit: the core reads any integer array (a 64-bit copy while it
     # works on it, none kept); the Python side keeps half the bytes
     ids = index_dtype(len(points))
     fine = Mesh._trusted(points, r["cells"].astype(ids), m.cell_type, r["facets"].astype(ids), r["facet_tags"])
@@ -354,8 +360,7 @@ def boundary_interpolation(coarse: Mesh, fine_points: np.ndarray, t: Transfer, t
     (bound_restriction.hpp scales by the row's sum of |weights|, which covers it).
     Not used by default: it was the suspected cause of the cycle growth on the Hertz hierarchies,
     and measured it is not (linear rates the same to 0.005 in 2D and 3D, Algorithm 2 the same or up
-    to 4 cycles worse: the negative weights tighten the restricted obstacles; docs/history/adaptive.md, issue 11,
-    third part, benchmarks/cycle_growth.py). Kept for that comparison and for meshes whose
+    to 4 cycles worse: the negative weights tighten the restricted obstacles; 0018-adaptive-estimator). Kept for that comparison and for meshes whose
     projection moves nodes by more than h^2 / (8 R)."""
     if coarse.cell_type not in ("triangle", "tetra"):
         raise ValueError(f"boundary interpolation is for simplices, got {coarse.cell_type}")

@@ -393,21 +393,26 @@ class Mesh:
     # -- queries --------------------------------------------------------------------------------
     @property
     def dim(self) -> int:
+        """The space dimension (2 or 3)."""
         return self.points.shape[1]
 
     @property
     def num_points(self) -> int:
+        """The number of nodes."""
         return len(self.points)
 
     @property
     def num_cells(self) -> int:
+        """The number of cells."""
         return len(self.cells)
 
     def boundary_nodes(self, tags: Optional[Sequence[int]] = None) -> np.ndarray:
+        """The ids (ascending) of the nodes of the boundary facets carrying one of `tags`."""
         sel = np.ones(len(self.facets), bool) if tags is None else np.isin(self.facet_tags, list(tags))
         return np.unique(self.facets[sel]).astype(np.int64)
 
     def facet_normals(self) -> np.ndarray:
+        """The outward unit normals of the boundary facets."""
         X = self.points[self.facets]
         if self.dim == 2:
             t = X[:, 1] - X[:, 0]
@@ -417,6 +422,7 @@ class Mesh:
         return n / np.linalg.norm(n, axis=1)[:, None]
 
     def facet_measures(self) -> np.ndarray:
+        """The lengths (2D) or areas (3D) of the boundary facets."""
         X = self.points[self.facets]
         if self.dim == 2:
             return np.linalg.norm(X[:, 1] - X[:, 0], axis=1)
@@ -426,6 +432,7 @@ class Mesh:
         return area
 
     def cell_measures(self) -> np.ndarray:
+        """The areas (2D) or volumes (3D) of the cells."""
         X = self.points[self.cells]
         if self.dim == 2:
             return _signed_area(X)
@@ -435,4 +442,5 @@ class Mesh:
         return sum(_tet_volume(X[:, list(t)]) for t in split)
 
     def copy(self) -> "Mesh":
+        """An independent copy of the mesh."""
         return Mesh(self.points.copy(), self.cells.copy(), self.cell_type, self.facets.copy(), self.facet_tags.copy())

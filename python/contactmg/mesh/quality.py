@@ -1,6 +1,6 @@
 """Shape measures of 3D cells, per cell: dihedral angles and the normalized radius ratio of
 tetrahedra, the scaled Jacobian of hexahedra. Used to watch that uniform refinement with boundary
-projection keeps the mesh family non-degenerate (issue 10)."""
+projection keeps the mesh family non-degenerate."""
 from __future__ import annotations
 
 import numpy as np

@@ -44,6 +44,7 @@ class Frictionless:
     law = "frictionless"
 
     def coefficients(self, contact_nodes: np.ndarray, measure: np.ndarray) -> np.ndarray:
+        """The law's coefficient per contact node (the core's `coefficients` argument)."""
         return np.zeros(len(contact_nodes))
 
 
@@ -58,6 +59,7 @@ class Tresca:
     law = "tresca"
 
     def coefficients(self, contact_nodes: np.ndarray, measure: np.ndarray) -> np.ndarray:
+        """The law's coefficient per contact node (the core's `coefficients` argument)."""
         return _per_node(self.bound, self.nodes, contact_nodes, "Tresca bound") * measure
 
 
@@ -71,4 +73,5 @@ class Coulomb:
     law = "coulomb"
 
     def coefficients(self, contact_nodes: np.ndarray, measure: np.ndarray) -> np.ndarray:
+        """The law's coefficient per contact node (the core's `coefficients` argument)."""
         return _per_node(self.coefficient, self.nodes, contact_nodes, "friction coefficient")

@@ -29,10 +29,12 @@ class Material:
 
     @property
     def lam(self) -> float:
+        """The first Lame parameter."""
         return self.E * self.nu / ((1 + self.nu) * (1 - 2 * self.nu))
 
     @property
     def mu(self) -> float:
+        """The shear modulus (second Lame parameter)."""
         return self.E / (2 * (1 + self.nu))
 
     @property

@@ -37,6 +37,7 @@ class MortarCoupling:
 
     @property
     def Mhat(self) -> sp.csr_matrix:
+        """D^{-1} M: the nonmortar rows of the coupling in the mortar nodes' columns."""
         return sp.diags(1.0 / self.D) @ self.M
 
     def gaps(self, nonmortar_points: np.ndarray, mortar_points: np.ndarray) -> np.ndarray:

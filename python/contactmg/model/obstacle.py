@@ -25,6 +25,7 @@ class PlaneObstacle:
     normal: Tuple[float, ...]
 
     def gaps_and_normals(self, x: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
+        """(gaps (m,), normals (m, d)) of the points `x` (m, d): distance to the obstacle along its normal and the body's outward normal there."""
         n = np.asarray(self.normal, dtype=float)
         p = np.asarray(self.point, dtype=float)
         if n.shape != (x.shape[1],) or p.shape != (x.shape[1],):
@@ -49,6 +50,7 @@ class NodalObstacle:
     nodes: Optional[Sequence[int]] = None
 
     def gaps_and_normals_at(self, nodes: np.ndarray, x: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
+        """gaps_and_normals of the given nodes (their ids and points)."""
         if self.nodes is None:
             return self.gaps_and_normals(x)
         given = node_ids(self.nodes, "NodalObstacle nodes")
@@ -61,6 +63,7 @@ class NodalObstacle:
         return NodalObstacle(g[rows], n[rows]).gaps_and_normals(x)
 
     def gaps_and_normals(self, x: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
+        """(gaps (m,), normals (m, d)) of the points `x` (m, d): distance to the obstacle along its normal and the body's outward normal there."""
         if self.nodes is not None:
             raise ValueError("a NodalObstacle with node ids is evaluated through gaps_and_normals_at(nodes, points)")
         g = np.asarray(self.gaps, dtype=float)
@@ -104,6 +107,7 @@ class SphereObstacle:
     inside: bool = False
 
     def gaps_and_normals(self, x: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
+        """(gaps (m,), normals (m, d)) of the points `x` (m, d): distance to the obstacle along its normal and the body's outward normal there."""
         c = np.asarray(self.center, dtype=float)
         if c.shape != (x.shape[1],) or not np.all(np.isfinite(c)):
             raise ValueError(f"the sphere's centre must have {x.shape[1]} finite components")
@@ -143,10 +147,12 @@ class RevolutionObstacle:
         return z, r
 
     def radius(self, zeta: np.ndarray) -> np.ndarray:
+        """The radius of the surface of revolution at the axial coordinates `zeta`."""
         z, r = self._profile()
         return np.interp(zeta, z, r)
 
     def gaps_and_normals(self, x: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
+        """(gaps (m,), normals (m, d)) of the points `x` (m, d): distance to the obstacle along its normal and the body's outward normal there."""
         if x.shape[1] != 3:
             raise ValueError("a surface of revolution is a 3D obstacle")
         z, r = self._profile()

@@ -1,4 +1,4 @@
-"""Independent check of a computed contact state against the discrete conditions (DESIGN section 2).
+"""Independent check of a computed contact state against the discrete conditions.
 
 The solvers stop when ||u^{k+1} - u^k||_A <= tol. That test cannot tell a solution from an iterate
 that the cycle maps back onto itself without solving anything (e.g. a smoother that flips a few
@@ -69,7 +69,7 @@ def contact_conditions(problem, result) -> Dict[str, float]:
     st = np.linalg.norm(sl[:, 1:], axis=1)
     law = problem.law
     # Where friction acts: Coulomb at nodes in contact (bound F |s_n|); Tresca at every contact node,
-    # touching or not (its bound is given, DESIGN section 4); frictionless nowhere.
+    # touching or not (its bound is given); frictionless nowhere.
     if law == "coulomb":
         s, rubs = problem.coefficients * np.abs(sl[:, 0]), active
     elif law == "tresca":

@@ -3,7 +3,7 @@
 The discrete contact pressure of a node (its multiplier: the nodal force over the measure of the
 node, for two bodies the dual mortar multiplier D^{-1} f) converges slowly in the maximum norm at a
 contact peak: at levels 5-7 of the Hertz half-disk the largest nodal value lies 10.6 / 6.6 / 3.8 %
-above p0 for one body and 6.0 / 4.0 / 2.6 % for two (measured, issue 13), and the largest |x| of a
+above p0 for one body and 6.0 / 4.0 / 2.6 % for two (measured), and the largest |x| of a
 contact node misses the half-width by up to a mesh size. The Hertz profile p(x) = p0 sqrt(1 -
 ((x - c)/a)^2) is an ellipse: p^2 = k0 + k1 x - k2 x^2 is linear in (k0, k1, k2), and the least-squares
 fit over every node in contact gives a and p0 from the whole zone (0.4 % off the one-body Hertz

@@ -85,14 +85,17 @@ class ContactResult:
     # -- contact quantities ---------------------------------------------------------------------
     @property
     def normal_stress(self) -> np.ndarray:
+        """The normal contact stress per contact node: normal force over the node's boundary measure."""
         return self.contact_force[:, 0] / self.measure
 
     @property
     def tangential_stress(self) -> np.ndarray:
+        """The tangential contact stress per contact node: tangential force over the node's boundary measure."""
         return self.contact_force[:, 1:] / self.measure[:, None]
 
     @property
     def contact_state(self) -> np.ndarray:
+        """The state per contact node: 0 not in contact, 1 stick, 2 slip."""
         return self.node_state[self.contact_nodes]
 
     @property
@@ -137,14 +140,17 @@ class ContactResult:
 
     @property
     def contact_extent(self) -> float:
+        """The extent of the contact zone (stick and slip nodes)."""
         return self.extent((STICK, SLIP))
 
     @property
     def stick_extent(self) -> float:
+        """The extent of the stick zone."""
         return self.extent((STICK,))
 
     @property
     def slip_extent(self) -> float:
+        """The extent of the slip zone."""
         return self.extent((SLIP,))
 
     def arc_length(self) -> np.ndarray:
@@ -158,12 +164,14 @@ class ContactResult:
         return _arc_length(self.mesh.points, self.contact_facets, self.contact_nodes)
 
     def counts(self) -> Dict[str, int]:
+        """The numbers of contact, stick and slip nodes."""
         s = self.contact_state
         return {"contact_nodes": int(np.sum(s > 0)), "stick_nodes": int(np.sum(s == STICK)),
                 "slip_nodes": int(np.sum(s == SLIP))}
 
     # -- output ---------------------------------------------------------------------------------
     def point_data(self) -> Dict[str, np.ndarray]:
+        """The per-node fields written to VTU files (displacement, contact state and stresses)."""
         n, d = self.mesh.num_points, self.mesh.dim
         sn = np.zeros(n)
         st = np.zeros((n, d - 1))

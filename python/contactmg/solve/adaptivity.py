@@ -43,6 +43,7 @@ class Estimate:
 
     @property
     def total(self) -> float:
+        """The estimated total error (root of the sum of squared indicators)."""
         return float(np.sqrt(self.edge_eta2.sum()))
 
 

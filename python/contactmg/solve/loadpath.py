@@ -181,18 +181,22 @@ class PathResult:
 
     @property
     def converged(self) -> bool:
+        """Did every step of the path run and converge?"""
         return len(self.steps) == len(self.path) and all(r.converged for r in self.steps)
 
     @property
     def last(self) -> ContactResult:
+        """The result of the last step solved."""
         return self.steps[-1]
 
     @property
     def parameters(self) -> List[float]:
+        """The load parameter of every step solved."""
         return [r.extra["parameter"] for r in self.steps]
 
     @property
     def cycles(self) -> List[int]:
+        """The cycles of every step solved."""
         return [r.cycles for r in self.steps]
 
     def summary(self, zone: Optional[Callable[[ContactResult, tuple], float]] = None,
