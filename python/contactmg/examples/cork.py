@@ -26,7 +26,8 @@ from ..mesh.generators_3d import CORK_SIDE, CORK_TOP, CylinderProjector, cylinde
 from ..mesh.hierarchy import MeshHierarchy
 from ..model.material import Material
 from ..model.obstacle import RevolutionObstacle
-from ..solve.contact_problem import ContactProblem, Dirichlet
+from ..model.problem import Body, Dirichlet, Problem
+from ..solve.options import with_cycle
 from ..results.result import SLIP, STICK
 
 E, NU = 20.0, 0.0
@@ -55,7 +56,7 @@ def neck(radius: float = RADIUS, clearance: float = CLEARANCE, interference: flo
 
 def cork_problem(levels: int = DEFAULT_LEVELS, friction: float = 0.4, push: float = PUSH,
                  coulomb_at_zero: bool = False, cycle: str = "F", nu1: int = 3, nu2: int = 3,
-                 material: Material = None, axial_layers: int = None) -> ContactProblem:
+                 material: Material = None, axial_layers: int = None) -> Problem:
     """The cork (hexahedra) with its top pushed by (0, 0, -push) into the neck, Coulomb friction F
     (frictionless for F = 0 unless coulomb_at_zero); axial_layers of the coarse mesh (default AXIAL_LAYERS)."""
     if isinstance(friction, bool) or not isinstance(friction, (int, float)) or not math.isfinite(friction) or friction < 0:
@@ -65,11 +66,11 @@ def cork_problem(levels: int = DEFAULT_LEVELS, friction: float = 0.4, push: floa
     mesh = cylinder(RADIUS, LENGTH, k=K, ring_layers=RING_LAYERS, nz=axial_layers or AXIAL_LAYERS)
     hierarchy = MeshHierarchy.build(mesh, levels, projector=CylinderProjector(RADIUS))
     law = Coulomb(friction) if (friction > 0 or coulomb_at_zero) else Frictionless()
-    return ContactProblem(hierarchy, material or Material(E, NU), [Dirichlet([CORK_TOP], (0.0, 0.0, -push))],
-                          contact_tags=[CORK_SIDE], obstacle=neck(), friction=law, cycle=cycle, nu1=nu1, nu2=nu2)
+    body = Body(hierarchy, material or Material(E, NU), [Dirichlet([CORK_TOP], (0.0, 0.0, -push))], contact_tags=[CORK_SIDE])
+    return with_cycle(Problem(body, obstacle=neck(), friction=law), cycle, nu1, nu2)
 
 
-def push_force(problem: ContactProblem, result) -> float:
+def push_force(problem: Problem, result) -> float:
     """The axial force the plunger exerts on the top face (downwards, reported positive): minus the
     z-sum of the residual A u - f over the top nodes."""
     top = problem.mesh.boundary_nodes([CORK_TOP])

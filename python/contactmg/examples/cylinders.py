@@ -6,8 +6,6 @@ meshed differently (5 k instead of 4 k arc segments on ring k) so the interface 
 the mortar side. Their flat faces are moved towards each other by 0.005 each."""
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import math
 
 import numpy as np
@@ -17,11 +15,8 @@ from ..mesh.generators import HERTZ_ARC, HERTZ_TOP, hertz_projector, polar_half_
 from ..mesh.hierarchy import MeshHierarchy
 from ..model.material import Material
 from ..mesh.mesh import Mesh
-from ..solve.contact_problem import Dirichlet
-if TYPE_CHECKING:
-    from ..solve.contact_problem import TwoBodyProblem
-# two_body (scipy.sparse, the mortar modules) is imported where a problem is built: the command line
-# builds this module's parser for every command, and scipy cost a `contactmg hertz` process 32 MiB
+from ..model.problem import Body, ContactPair, Dirichlet, Problem
+from ..solve.options import with_cycle
 
 E, NU, RADIUS = 2000.0, 0.28, 0.4
 FACE_DISPLACEMENT = 0.005
@@ -44,12 +39,10 @@ def lower_half_disk(segments: int = 5) -> Mesh:
 
 def cylinders_problem(levels: int = 5, friction: float = 0.4, E2: float = E, nu2: float = NU, coulomb_at_zero=False,
                       cycle: str = "F", smooth: int = 3, upper_segments: int = 4, lower_segments: int = 5,
-                      tied_correction: bool = True) -> TwoBodyProblem:
+                      tied_correction: bool = True) -> Problem:
     """Two elastic half cylinders pressed together (the two-body Hertz problem) with `levels` uniform levels and Coulomb friction `friction`."""
     if isinstance(friction, bool) or not isinstance(friction, (int, float)) or not math.isfinite(friction) or friction < 0:
         raise ValueError(f"the friction coefficient must be a finite number >= 0, got {friction!r}")
-    from ..model.problem import Body, ContactPair
-    from ..solve.contact_problem import TwoBodyProblem
 
     upper = MeshHierarchy.build(polar_half_disk((0.0, 0.4), RADIUS, rings=3, segments=upper_segments), levels,
                                 projector=hertz_projector((0.0, 0.4), RADIUS))
@@ -58,7 +51,7 @@ def cylinders_problem(levels: int = 5, friction: float = 0.4, E2: float = E, nu2
               Body(lower, Material(E2, nu2), [Dirichlet([HERTZ_TOP], (0.0, FACE_DISPLACEMENT))])]
     pair = ContactPair(0, 1, [HERTZ_ARC], [HERTZ_ARC], search=SEARCH, region=lambda mid: np.abs(mid[:, 0]) < ZONE)
     law = Coulomb(friction) if (friction > 0 or coulomb_at_zero) else Frictionless()
-    p = TwoBodyProblem(bodies, pair, law, cycle=cycle, nu1=smooth, nu2=smooth, tied_correction=tied_correction)
+    p = with_cycle(Problem(bodies, friction=law, pairs=pair, tied_correction=tied_correction), cycle, smooth, smooth)
     p.benchmark = "hertz"  # zones centred on x = 0
     return p
 

@@ -11,7 +11,8 @@ from ..mesh.hierarchy import MeshHierarchy
 from ..model.material import Material
 from ..model.obstacle import PlaneObstacle
 from ..solve.adaptivity import adaptive_hierarchy
-from ..solve.contact_problem import ContactProblem, Dirichlet
+from ..model.problem import Body, Dirichlet, Problem
+from ..solve.options import with_cycle
 
 E, NU = 2000.0, 0.28
 CENTER, RADIUS = (0.0, 0.4), 0.4
@@ -29,7 +30,7 @@ ADAPTIVE_FRICTION = 0.4
 
 def hertz_problem(cell: str = "triangle", levels: int = 6, friction: float = 0.4, coulomb_at_zero: bool = False,
                   cycle: str = "F", nu1: int = 3, nu2: int = 3, material: Material = None,
-                  hierarchy="uniform") -> ContactProblem:
+                  hierarchy="uniform") -> Problem:
     """Lower half disk (centre (0, 0.4), radius 0.4) pushed by u = (0, -0.005) on its top edge onto
     the rigid plane y = 0, with Coulomb friction F (frictionless for F = 0 unless
     coulomb_at_zero, which the fixed-point method needs). `hierarchy`: "uniform" (refinement of
@@ -48,12 +49,12 @@ def hertz_problem(cell: str = "triangle", levels: int = 6, friction: float = 0.4
 
 
 def hertz_problem_on(hierarchy: MeshHierarchy, friction: float = 0.4, coulomb_at_zero: bool = False,
-                     cycle: str = "F", nu1: int = 3, nu2: int = 3, material: Material = None) -> ContactProblem:
+                     cycle: str = "F", nu1: int = 3, nu2: int = 3, material: Material = None) -> Problem:
     """The Hertz problem on a given hierarchy of the half disk."""
     law = Coulomb(friction) if (friction > 0 or coulomb_at_zero) else Frictionless()
-    problem = ContactProblem(hierarchy, material or Material(E, NU), [Dirichlet([HERTZ_TOP], (0.0, TOP_DISPLACEMENT))],
-                             contact_tags=[HERTZ_ARC], obstacle=PlaneObstacle((0.0, 0.0), (0.0, -1.0)), friction=law,
-                             cycle=cycle, nu1=nu1, nu2=nu2)
+    body = Body(hierarchy, material or Material(E, NU), [Dirichlet([HERTZ_TOP], (0.0, TOP_DISPLACEMENT))],
+                contact_tags=[HERTZ_ARC])
+    problem = with_cycle(Problem(body, obstacle=PlaneObstacle((0.0, 0.0), (0.0, -1.0)), friction=law), cycle, nu1, nu2)
     problem.benchmark = "hertz"  # zones centred on x = 0: results have contact_halfwidth, stick_halfwidth
     return problem
 

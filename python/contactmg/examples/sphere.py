@@ -13,7 +13,8 @@ from ..mesh.hierarchy import MeshHierarchy
 from ..model.material import Material
 from ..model.obstacle import PlaneObstacle
 from ..solve.adaptivity import adaptive_hierarchy
-from ..solve.contact_problem import ContactProblem, Dirichlet
+from ..model.problem import Body, Dirichlet, Problem
+from ..solve.options import with_cycle
 
 E, NU = 2000.0, 0.28
 CENTER, RADIUS = (0.0, 0.0, 0.4), 0.4
@@ -42,7 +43,7 @@ ADAPTIVE_MAX_CYCLES = 2000
 def sphere_problem(cell: str = "hexahedron", levels: int = DEFAULT_LEVELS, friction: float = 0.4,
                    displacement: float = DISPLACEMENT, coulomb_at_zero: bool = False, cycle: str = "F",
                    nu1: int = 3, nu2: int = 3, material: Material = None, hierarchy="uniform",
-                   memory_fraction: float = 0.8) -> ContactProblem:
+                   memory_fraction: float = 0.8) -> Problem:
     """The half ball (tetra or hexahedron cells) pushed by u = (0, 0, -displacement) on its top onto
     z = 0, with Coulomb friction F (frictionless for F = 0 unless coulomb_at_zero). `hierarchy`:
     "uniform" (refinement of the coarse mesh), "adaptive" (sphere_adaptive_hierarchy for this
@@ -64,12 +65,12 @@ def sphere_problem(cell: str = "hexahedron", levels: int = DEFAULT_LEVELS, frict
 
 def sphere_problem_on(hierarchy: MeshHierarchy, friction: float = 0.4, displacement: float = DISPLACEMENT,
                       coulomb_at_zero: bool = False, cycle: str = "F", nu1: int = 3, nu2: int = 3,
-                      material: Material = None) -> ContactProblem:
+                      material: Material = None) -> Problem:
     """The sphere problem on a given hierarchy of the half ball."""
     law = Coulomb(friction) if (friction > 0 or coulomb_at_zero) else Frictionless()
-    return ContactProblem(hierarchy, material or Material(E, NU), [Dirichlet([BALL_TOP], (0.0, 0.0, -displacement))],
-                          contact_tags=[BALL_SURFACE], obstacle=PlaneObstacle((0.0, 0.0, 0.0), (0.0, 0.0, -1.0)),
-                          friction=law, cycle=cycle, nu1=nu1, nu2=nu2)
+    body = Body(hierarchy, material or Material(E, NU), [Dirichlet([BALL_TOP], (0.0, 0.0, -displacement))],
+                contact_tags=[BALL_SURFACE])
+    return with_cycle(Problem(body, obstacle=PlaneObstacle((0.0, 0.0, 0.0), (0.0, 0.0, -1.0)), friction=law), cycle, nu1, nu2)
 
 
 def sphere_adaptive_hierarchy(levels: int, friction: float = 0.4, displacement: float = DISPLACEMENT,

@@ -8,8 +8,6 @@ each: for equal materials the interface stays on z = 0 and each body is the one-
 displacement D against a frictionless plane."""
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import math
 
 import numpy as np
@@ -19,11 +17,8 @@ from ..mesh.generators_3d import BALL_SURFACE, BALL_TOP, SphereProjector, half_b
 from ..mesh.hierarchy import MeshHierarchy
 from ..model.material import Material
 from ..mesh.mesh import Mesh
-from ..solve.contact_problem import Dirichlet
-if TYPE_CHECKING:
-    from ..solve.contact_problem import TwoBodyProblem
-# two_body (scipy.sparse, the mortar modules) is imported where a problem is built: the command line
-# builds this module's parser for every command, and scipy cost a `contactmg hertz` process 32 MiB
+from ..model.problem import Body, ContactPair, Dirichlet, Problem
+from ..solve.options import with_cycle
 
 E, NU, RADIUS = 2000.0, 0.28, 0.4
 UPPER_CENTER, LOWER_CENTER = (0.0, 0.0, RADIUS), (0.0, 0.0, -RADIUS)
@@ -61,7 +56,7 @@ def lower_half_ball(cell: str = "hexahedron", k: int = LOWER_K, inner: float = L
 def spheres_problem(cell: str = "hexahedron", levels: int = DEFAULT_LEVELS, friction: float = 0.4, E2: float = E,
                     nu2: float = NU, displacement: float = DISPLACEMENT, coulomb_at_zero: bool = False,
                     cycle: str = "F", nu1: int = 3, nu2_sweeps: int = 3, upper_k: int = UPPER_K,
-                    lower_k: int = LOWER_K, lower_inner: float = LOWER_INNER) -> TwoBodyProblem:
+                    lower_k: int = LOWER_K, lower_inner: float = LOWER_INNER) -> Problem:
     """The two hemispheres, the upper (E, NU) nonmortar, the lower (E2, nu2) mortar, each flat face
     moved by `displacement` towards the other; Coulomb friction F on the relative tangential
     displacement (frictionless for F = 0 unless coulomb_at_zero)."""
@@ -72,8 +67,6 @@ def spheres_problem(cell: str = "hexahedron", levels: int = DEFAULT_LEVELS, fric
         raise ValueError(f"the displacement D must lie in (0, {0.25 * RADIUS}) (small deformations), got {displacement!r}")
     if cell not in ("tetra", "hexahedron"):
         raise ValueError(f"cell must be 'tetra' or 'hexahedron', got {cell!r}")
-    from ..model.problem import Body, ContactPair
-    from ..solve.contact_problem import TwoBodyProblem
 
     upper = MeshHierarchy.build(half_ball(cell, UPPER_CENTER, RADIUS, k=upper_k, inner=UPPER_INNER), levels,
                                 projector=SphereProjector(UPPER_CENTER, RADIUS, (BALL_SURFACE,)))
@@ -84,7 +77,7 @@ def spheres_problem(cell: str = "hexahedron", levels: int = DEFAULT_LEVELS, fric
     pair = ContactPair(0, 1, [BALL_SURFACE], [BALL_SURFACE], search=SEARCH,
                        region=lambda mid: np.hypot(mid[:, 0], mid[:, 1]) < ZONE)
     law = Coulomb(friction) if (friction > 0 or coulomb_at_zero) else Frictionless()
-    return TwoBodyProblem(bodies, pair, law, cycle=cycle, nu1=nu1, nu2=nu2_sweeps)
+    return with_cycle(Problem(bodies, friction=law, pairs=pair), cycle, nu1, nu2_sweeps)
 
 
 def effective_radius(R1: float, R2: float) -> float:
@@ -107,14 +100,14 @@ def two_body_p0(load: float, R1: float, R2: float, m1: Material, m2: Material) -
     return 3 * load / (2 * math.pi * two_body_radius(load, R1, R2, m1, m2) ** 2)
 
 
-def relative_displacement(problem: TwoBodyProblem, result) -> np.ndarray:
+def relative_displacement(problem: Problem, result) -> np.ndarray:
     """w = T^{-1} u = u - N u: at the nonmortar nodes the displacement relative to the mortar side's
     (D^{-1} M u_m), the unknowns the nodal conditions are posed on."""
     u = np.asarray(result.displacement)
     return u - problem.N @ u
 
 
-def check_conditions(problem: TwoBodyProblem, result) -> dict:
+def check_conditions(problem: Problem, result) -> dict:
     """The independent check of checks.contact_conditions on the transformed problem (T^T A T,
     T^T f, the relative displacement w): the conditions of the nonmortar nodes on w."""
     import dataclasses

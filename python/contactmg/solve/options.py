@@ -193,6 +193,14 @@ def for_method(base: SolverOptions, method: str, **fields) -> SolverOptions:
     return base.replace(method=method, **fields)
 
 
+def with_cycle(problem, cycle: str = "F", nu1: int = 3, nu2: int = 3):
+    """`problem` with the cycle (cycle, nu1, nu2) as the default of problem.solve (left None, the
+    defaults, for F(3,3)); returns the problem."""
+    if (cycle, nu1, nu2) != ("F", 3, 3):
+        problem.default_options = options_from(problem.default_options).replace(cycle=cycle, nu1=nu1, nu2=nu2)
+    return problem
+
+
 def options_from(options=None, **fields) -> SolverOptions:
     """A SolverOptions from None, a SolverOptions or a dict, with `fields` set on top (TypeError for
     an unknown field)."""
