@@ -30,6 +30,7 @@ from ..model.friction import Coulomb, Frictionless, Tresca
 from ..mesh.hierarchy import (_BASE_BYTES, MeshHierarchy, Projector, _refined, available_memory_bytes,
                               bytes_per_node, longest_edge_first)
 from ..mesh.mesh import Mesh
+from .options import SolverOptions
 
 
 @dataclass
@@ -208,7 +209,8 @@ def adaptive_hierarchy(mesh: Mesh, levels: int, problem_factory: Callable[[MeshH
              progress: Optional[Callable[[int, MeshHierarchy, object], None]] = None) -> MeshHierarchy:
     """Adaptive refinement of a simplicial mesh to `levels` levels in all (level 1 is `mesh`): on
     each level build the problem with `problem_factory(hierarchy)` (the hierarchy so far; the
-    same description on every level), solve it (`problem.solve(**solve_options)`), estimate
+    same description on every level), solve it (`problem.solve(**solve_options)`, or with
+    `solve_options` a SolverOptions: `problem.solve(options=solve_options)`), estimate
     the error with the hierarchical estimator (contactmg.solve.adaptivity), mark the cells of the
     bulk criterion with parameter `theta` and refine them by newest-vertex bisection with
     conforming closure; new boundary nodes go through `projector`. Triangles: the refinement
@@ -231,7 +233,7 @@ def adaptive_hierarchy(mesh: Mesh, levels: int, problem_factory: Callable[[MeshH
     if isinstance(theta, bool) or not isinstance(theta, (int, float)) or not 0 < theta <= 1:
         raise ValueError(f"theta must be a number in (0, 1], got {theta!r}")
     if not callable(problem_factory):
-        raise TypeError("problem_factory must be a callable hierarchy -> ContactProblem")
+        raise TypeError("problem_factory must be a callable hierarchy -> Problem")
     t0 = time.perf_counter()
     _core.check_cells(mesh.points, mesh.cells, mesh.cell_type)
     if mesh.cell_type == "triangle":
@@ -240,7 +242,8 @@ def adaptive_hierarchy(mesh: Mesh, levels: int, problem_factory: Callable[[MeshH
     else:  # the core marks the coarse tetrahedra itself (bisection_marks None)
         coarse = mesh
     h = MeshHierarchy([coarse], [], kind="adaptive")
-    opts = dict(solve_options or {})
+    # a SolverOptions, or a dict of its fields
+    opts = dict(options=solve_options) if isinstance(solve_options, SolverOptions) else dict(solve_options or {})
     for level in range(1, levels + 1):
         if level == levels and not estimate_finest:
             break
