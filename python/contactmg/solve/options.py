@@ -26,8 +26,10 @@ DEFAULT_OMEGA_POST_ADAPTIVE = {"triangle": 1.5}
 # range: the coloured sweep streams memory; 0003-coloured-gauss-seidel).
 DEFAULT_ORDERING = "coloured"
 
-# Options the core takes only when it is built: a solve cannot change them.
-BUILD_FIELDS = ("ordering", "local_smoothing", "release_hierarchy")
+# Options taken only when the core is built: a solve cannot change them. (ordering is taken at the
+# build too, as the storage of the levels, but a solve may sweep in the other order on it: the same
+# answer, slower.)
+BUILD_FIELDS = ("local_smoothing", "release_hierarchy")
 
 
 def _is_int(v) -> bool:
@@ -69,7 +71,9 @@ class SolverOptions:
     threads: int = 0
     """Threads of sweeps, products and norms (0: all cores); results are bitwise the same on any count."""
     ordering: Optional[str] = None
-    """Gauss-Seidel order, fixed when the solver is built: "coloured" or "lexicographic" (None: coloured)."""
+    """Gauss-Seidel order: "coloured" or "lexicographic" (None: coloured). The solver is built for its
+    options' ordering (coloured: the levels stored by colours, 0003-coloured-gauss-seidel); a solve
+    may take the other order on it (the same answer, slower)."""
     local_smoothing: Optional[bool] = None
     """Coarse levels smooth only where they differ from the level below (fixed when the solver is
     built); None: on for adaptive hierarchies (0004-local-smoothing)."""

@@ -3,6 +3,7 @@ to the next (load, prescribed displacements, slip origin, start value)."""
 from __future__ import annotations
 
 import time
+import weakref
 from typing import Callable, Optional
 
 import numpy as np
@@ -27,14 +28,19 @@ def memory_report(problem: Problem, core=None) -> dict:
 class Solver:
     """The core solver of `problem` (a Problem) with `options` (a SolverOptions, a dict of its
     fields, or None: the defaults), built once here. Options fixed at the build (ordering,
-    local_smoothing, release_hierarchy) hold for every solve; the others may change per solve."""
+    local_smoothing, release_hierarchy; ordering as the storage of the levels) hold for every solve; the
+    others may change per solve."""
 
-    def __init__(self, problem: Problem, options=None):
+    def __init__(self, problem: Problem, options=None, *, _kept: bool = False):
         if not isinstance(problem, Problem):
             raise TypeError(f"problem must be a Problem, got {type(problem).__name__}")
-        self.problem = problem
-        self._given = options_from(options)  # as given: with_options and per-solve dicts change these
-        self.options = resolve_options(problem, self._given)
+        # The solver a problem keeps for problem.solve refers back to it weakly: no reference cycle,
+        # so a dropped problem frees its core at once (not at a later garbage collection, whose
+        # timing would move large frees into other solves).
+        self._problem = weakref.ref(problem) if _kept else problem
+        # the options as given (None where resolve_options decides): with_options and per-solve dicts change these
+        self.requested = options_from(options)
+        self.options = resolve_options(problem, self.requested)
         t0 = time.perf_counter()
         self.core = self._build(problem.law, self.options, take_matrix=True)
         if self.options.local_smoothing:
@@ -45,6 +51,12 @@ class Solver:
             problem.release_vectors()
             # made for one solve: the cycles' workspace need not outlive it (the lower peak)
             self.core.keep_workspace(False)
+
+    @property
+    def problem(self) -> Problem:
+        """The problem this solver solves."""
+        p = self._problem
+        return p() if isinstance(p, weakref.ref) else p
 
     # -- building -------------------------------------------------------------------------------
     def _build(self, law: str, options: SolverOptions, frame_fixed=None, frame_values=None, load=None,
@@ -82,8 +94,9 @@ class Solver:
             raise ValueError(f"{', '.join(fixed)} cannot change per solve: the core is built with it (make a new Solver)")
         other = object.__new__(Solver)
         other.__dict__.update(self.__dict__)
-        other._given = self._given.replace(**changes)
-        other.options = resolve_options(self.problem, other._given)
+        other._problem = self.problem  # held: the copy may outlive a problem that keeps this solver
+        other.requested = self.requested.replace(**changes)
+        other.options = resolve_options(self.problem, other.requested)
         return other
 
     def new_core(self, load: Optional[np.ndarray] = None, fixed_values: Optional[np.ndarray] = None):
@@ -136,7 +149,7 @@ class Solver:
         if isinstance(options, SolverOptions):
             given = options
         elif isinstance(options, dict):
-            given = self._given.replace(**options)
+            given = self.requested.replace(**options)
         else:
             raise TypeError(f"options must be a SolverOptions or a dict, got {type(options).__name__}")
         opts = resolve_options(self.problem, given)
