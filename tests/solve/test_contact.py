@@ -8,7 +8,7 @@ from contactmg.mesh.generators import rectangle
 from contactmg.mesh.hierarchy import MeshHierarchy
 from contactmg.model.material import Material
 from contactmg.model.obstacle import PlaneObstacle
-from contactmg.solve.contact_problem import ContactProblem, Dirichlet
+from contactmg.model.problem import Body, Dirichlet, Problem
 from contactmg.results.result import FREE, SLIP, STICK
 from contactmg import _core
 from helpers import assert_contact_conditions
@@ -35,8 +35,8 @@ def test_hertz_solution_satisfies_contact_and_coulomb_conditions(cell, F):
 def test_energy_decreases_every_cycle(law):
     p = hertz.hertz_problem("triangle", 6, 0.0)
     if law == "tresca":
-        p = ContactProblem(p.hierarchy, p.material, [Dirichlet([2], (0.0, hertz.TOP_DISPLACEMENT))], contact_tags=[1],
-                           obstacle=PlaneObstacle((0.0, 0.0), (0.0, -1.0)), friction=Tresca(30.0))
+        p = Problem(Body(p.hierarchy, p.material, [Dirichlet([2], (0.0, hertz.TOP_DISPLACEMENT))], contact_tags=[1]),
+                    obstacle=PlaneObstacle((0.0, 0.0), (0.0, -1.0)), friction=Tresca(30.0))
     res = p.solve()
     assert res.converged
     e = res.history["energy"]
@@ -51,8 +51,8 @@ def test_tresca_solution_conditions():
     the obstacle (the bound is given)."""
     p = hertz.hertz_problem("quad", 5, 0.0)
     g = 5.0
-    p = ContactProblem(p.hierarchy, p.material, [Dirichlet([2], (0.0, hertz.TOP_DISPLACEMENT))], contact_tags=[1],
-                       obstacle=PlaneObstacle((0.0, 0.0), (0.0, -1.0)), friction=Tresca(g))
+    p = Problem(Body(p.hierarchy, p.material, [Dirichlet([2], (0.0, hertz.TOP_DISPLACEMENT))], contact_tags=[1]),
+                obstacle=PlaneObstacle((0.0, 0.0), (0.0, -1.0)), friction=Tresca(g))
     res = p.solve()
     s = res.contact_force
     bound = g * p.contact.measure
@@ -107,8 +107,8 @@ def layer_problem(cell, s, depth, F, nx=8, ny=4, levels=3, H=0.5, W=1.0, mat=Mat
         return np.c_[ux, uy]
 
     h = MeshHierarchy.build(rectangle(nx, ny, lx=W, ly=H, cell=cell), levels)
-    prob = ContactProblem(h, mat, [Dirichlet([2, 3, 4], exact)], contact_tags=[1],
-                          obstacle=PlaneObstacle((0.0, 0.0), (0.0, -1.0)), friction=Coulomb(F) if F > 0 else Frictionless())
+    prob = Problem(Body(h, mat, [Dirichlet([2, 3, 4], exact)], contact_tags=[1]),
+                   obstacle=PlaneObstacle((0.0, 0.0), (0.0, -1.0)), friction=Coulomb(F) if F > 0 else Frictionless())
     return prob, exact, s_star, lam, G
 
 

@@ -1,5 +1,5 @@
 """Over-relaxed Gauss-Seidel sweeps: SolverOptions.omega on the unbounded block solves,
-the default by cell type (ContactProblem.smoothing_omega), the rate it buys on the adaptive Hertz
+the default by cell type (resolve_options), the rate it buys on the adaptive Hertz
 levels, and that the monotone cycles stay monotone and reach the same solution."""
 import numpy as np
 import pytest
