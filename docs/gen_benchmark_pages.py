@@ -107,12 +107,12 @@ def stamp(data: dict) -> list:
             + (f" (`{argv}`)" if argv else "") + f"; machine: {machine or '?'}.*", ""]
 
 
-def page(group: str, files: list) -> str:
+def page(group: str, files: list, results: Path = RESULTS) -> str:
     lines = [GENERATED, "", f"# {GROUP_TITLES.get(group, group)}", ""]
     for f in files:
         data = json.loads(f.read_text())
         name = data.get("benchmark", f"{group}/{f.stem}")
-        lines += [f"## {name}", "", f"From `{f.relative_to(ROOT)}`.", ""] + stamp(data)
+        lines += [f"## {name}", "", f"From `benchmarks/results/{f.relative_to(results).as_posix()}`.", ""] + stamp(data)
         lines += render(data.get("results"), "Results", 2)[2:] if isinstance(data.get("results"), dict) \
             else render(data.get("results"), "Results", 3)
     return "\n".join(lines) + "\n"
@@ -132,7 +132,7 @@ def generate(results: Path = RESULTS, out: Path = OUT) -> list:
     for group, files in groups.items():
         slug = group.replace("/", "-")
         path = out / f"{slug}.md"
-        path.write_text(page(group, files))
+        path.write_text(page(group, files, results))
         written.append(path)
         index.append(f"- [{GROUP_TITLES.get(group, group)}]({slug}.md): "
                      + ", ".join(f"`{f.stem}`" for f in files))
