@@ -1,9 +1,6 @@
 """The documentation site builds in strict mode (broken links, unparsable docstrings and missing
-pages fail it), its API pages document the public classes, and the benchmark pages are generated
-from the recorded results."""
-import importlib.util
-import json
-import shutil
+pages fail it) and its API pages document the public classes."""
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -16,31 +13,6 @@ pytest.importorskip("mkdocstrings")
 pytest.importorskip("material")
 
 
-def _generator():
-    spec = importlib.util.spec_from_file_location("gen_benchmark_pages", ROOT / "docs" / "gen_benchmark_pages.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
-
-
-def test_benchmark_pages_show_every_recorded_result(tmp_path):
-    pages = _generator().generate(ROOT / "benchmarks" / "results", tmp_path)
-    text = {p.name: p.read_text() for p in pages}
-    files = sorted((ROOT / "benchmarks" / "results").glob("*/*.json"))
-    assert files, "no recorded benchmark results"
-    for f in files:
-        data = json.loads(f.read_text())
-        page = text[f"{f.parent.name}.md"]
-        assert f"## {data['benchmark']}" in page
-        assert str(data["commit"])[:12] in page and data["date"] in page  # the stamp of the measurement
-        assert str(data["machine"]["cores"]) + " cores" in page
-    # a table of the Table 1 benchmark: one row per friction coefficient, one column per level
-    table1 = json.loads((ROOT / "benchmarks/results/paper/table1.json").read_text())["results"]
-    assert "#### fixed_point_vcycles" in text["paper.md"]
-    assert text["paper.md"].count("\n| " + str(len(table1["frictions"])) + " | ") >= 1
-
-
-
 def test_site_builds_strict_with_the_api_pages(tmp_path):
     import contactmg
     if not hasattr(contactmg, "Solver"):
@@ -48,7 +20,7 @@ def test_site_builds_strict_with_the_api_pages(tmp_path):
     site = tmp_path / "site"
     proc = subprocess.run([sys.executable, "-m", "mkdocs", "build", "--strict", "-q", "-d", str(site)],
                           cwd=ROOT, capture_output=True, text=True, timeout=300,
-                          env={**__import__("os").environ, "NO_MKDOCS_2_WARNING": "1"})
+                          env={**os.environ, "NO_MKDOCS_2_WARNING": "1"})
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
     api = {name: (site / "api" / name / "index.html").read_text() for name in ("mesh", "model", "results", "solve")}
     for name in ("Mesh", "MeshHierarchy"):
