@@ -28,7 +28,7 @@ def gallery():
 
 
 def test_every_script_is_tested():
-    assert set(SCRIPTS) == {"hertz_stresses", "friction_laws", "load_path"}
+    assert set(SCRIPTS) == {"hertz_stresses", "friction_laws", "load_path", "adaptive_hierarchy"}
 
 
 def test_hertz_stresses(gallery, tmp_path):
@@ -71,6 +71,27 @@ def test_load_path(gallery, tmp_path):
     left, right = out["figure"].axes
     assert len(right.patches) == 5  # one bar of cycles per step
     assert right.get_ylabel() == "multigrid cycles"
+
+
+def test_adaptive_hierarchy(gallery, tmp_path):
+    out = gallery("adaptive_hierarchy").main([str(tmp_path)])
+    assert (tmp_path / "adaptive_hierarchy.png").is_file()
+    h, dofs = out["hierarchy"], out["dofs"]
+    assert h.levels == 6 and np.all(np.diff(dofs) > 0)
+    est = np.array(h.estimated_error)
+    assert len(est) == h.levels and np.all(np.diff(est) < 0)  # the estimate falls on every level
+    # the refinement concentrates at the contact zone: cells there are far smaller than at the top
+    mesh = h.finest
+    centroids = mesh.points[mesh.cells].mean(axis=1)
+    p = mesh.points[mesh.cells]
+    area = 0.5 * np.abs((p[:, 1, 0] - p[:, 0, 0]) * (p[:, 2, 1] - p[:, 0, 1])
+                        - (p[:, 2, 0] - p[:, 0, 0]) * (p[:, 1, 1] - p[:, 0, 1]))
+    near = (np.abs(centroids[:, 0]) < 0.04) & (centroids[:, 1] < 0.02)
+    far = centroids[:, 1] > 0.3
+    assert near.any() and far.any()
+    assert area[near].mean() < area[far].mean() / 20
+    ax, ax2 = out["figure"].axes
+    assert ax2.get_xlabel() == "unknowns" and ax2.get_xscale() == "log"
 
 
 def test_output_folder_from_the_environment(tmp_path):
