@@ -28,7 +28,7 @@ def gallery():
 
 
 def test_every_script_is_tested():
-    assert set(SCRIPTS) == {"hertz_stresses", "friction_laws", "load_path", "adaptive_hierarchy"}
+    assert set(SCRIPTS) == {"hertz_stresses", "friction_laws", "load_path", "adaptive_hierarchy", "two_cylinders"}
 
 
 def test_hertz_stresses(gallery, tmp_path):
@@ -92,6 +92,21 @@ def test_adaptive_hierarchy(gallery, tmp_path):
     assert area[near].mean() < area[far].mean() / 20
     ax, ax2 = out["figure"].axes
     assert ax2.get_xlabel() == "unknowns" and ax2.get_xscale() == "log"
+
+
+def test_two_cylinders(gallery, tmp_path):
+    out = gallery("two_cylinders").main([str(tmp_path)])
+    assert (tmp_path / "two_cylinders.png").is_file()
+    assert out["result"].converged
+    # the interface's contact zone has the two-body Hertz half-width (within 10 %: the discrete
+    # half-width is the last node in contact, up to one node spacing short)
+    assert out["halfwidth"] == pytest.approx(out["hertz_halfwidth"], rel=0.10)
+    ax = out["figure"].axes[0]
+    lines = {line.get_label(): line for line in ax.get_lines()}
+    n, t = lines["normal stress"].get_ydata(), lines["tangential stress"].get_ydata()
+    assert np.all(np.abs(t) <= 0.4 * np.abs(n) * (1 + 1e-6) + 1e-9)  # Coulomb's bound holds
+    # the tangential stress is odd about the centre (the same curvature above and below)
+    assert abs(t.max() + t.min()) < 0.05 * t.max()
 
 
 def test_output_folder_from_the_environment(tmp_path):
