@@ -6,7 +6,7 @@ LEVELS ?= 7
 FRICTION ?= 0.4
 PIP = $(PYTHON) -m pip install --disable-pip-version-check -q
 
-.PHONY: setup demo test test-all benchmark sanitize clean
+.PHONY: setup demo test test-all benchmark sanitize clean docs
 
 setup:
 	@if [ ! -f /usr/include/eigen3/Eigen/Core ]; then \
@@ -14,7 +14,7 @@ setup:
 	  if [ "$$(id -u)" = 0 ]; then apt-get update -qq && apt-get install -y -qq libeigen3-dev; \
 	  else sudo apt-get update -qq && sudo apt-get install -y -qq libeigen3-dev; fi; fi
 	$(PIP) "scikit-build-core>=0.10" "pybind11>=2.12" numpy
-	$(PIP) --no-build-isolation -e ".[test]"
+	$(PIP) --no-build-isolation -e ".[test,docs]"
 
 # table1: the paper's adaptive hierarchy, levels 3 5 7 9 11 (464,670 dofs), both algorithms for the ten
 # coefficients in two processes; exit status 3 (runs that did not converge, reported) does not stop the demo.
@@ -34,6 +34,11 @@ test: setup
 test-all: setup
 	$(PYTHON) -m pytest -q -m ""
 
+# The documentation site into site/ (the benchmark pages are generated from benchmarks/results first).
+docs: setup
+	$(PYTHON) docs/gen_benchmark_pages.py
+	$(PYTHON) -m mkdocs build --strict -d site
+
 benchmark: setup
 	$(PYTHON) benchmarks/run_all.py
 
@@ -47,4 +52,4 @@ sanitize:
 	$(PIP) --no-build-isolation -e ".[test]"
 
 clean:
-	rm -rf build $(OUT)
+	rm -rf build site $(OUT)
