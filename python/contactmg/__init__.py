@@ -26,7 +26,7 @@ from .mesh.generators_3d import (BALL_SURFACE, BALL_TOP, CORK_BOTTOM, CORK_SIDE,
                             SphereProjector, ball_projector, box, cylinder, half_ball)
 from .model.obstacle import RevolutionObstacle, SphereObstacle  # noqa: E402
 
-__version__ = "0.1.0"
+__version__ = "0.2.0"
 
 __all__ = ["Coulomb", "Frictionless", "Tresca", "contact_frames", "HERTZ_ARC", "HERTZ_TOP", "RECT_BOTTOM",
            "RECT_LEFT", "RECT_RIGHT", "RECT_TOP", "CircleProjector", "hertz_half_disk", "hertz_projector",
