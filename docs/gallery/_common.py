@@ -28,3 +28,22 @@ def hertz_problem(levels: int, friction, top=-0.005) -> "cm.Problem":
                    dirichlet=[cm.Dirichlet([cm.HERTZ_TOP], (0.0, top))],
                    contact_tags=[cm.HERTZ_ARC])
     return cm.Problem(body, obstacle=cm.PlaneObstacle((0.0, 0.0), (0.0, -1.0)), friction=friction)
+
+
+def stress_figure(result, a_hertz: float, name: str, argv=None, title=None) -> dict:
+    """The boundary stresses of `result` with Hertz's half-width marked, saved as `name`.png."""
+    import matplotlib.pyplot as plt
+    from contactmg.results import plots
+
+    fig, ax = plt.subplots(figsize=(7, 4))
+    plots.plot_boundary_stress(result, ax=ax, margin=1.5)
+    ax.axvline(-a_hertz, color="k", ls=":", lw=1, label="Hertz half-width")
+    ax.axvline(a_hertz, color="k", ls=":", lw=1)
+    if title:
+        ax.set_title(title)
+    ax.legend(loc="best", fontsize=8)
+    fig.tight_layout()
+    path = out_dir(argv) / f"{name}.png"
+    fig.savefig(path, dpi=110)
+    return {"figure": fig, "path": path, "result": result, "hertz_halfwidth": a_hertz,
+            "halfwidth": result.halfwidth()}

@@ -6,7 +6,7 @@ import numpy as np
 
 import contactmg as cm
 
-from _common import hertz_problem, out_dir
+from _common import out_dir
 
 LEVELS, THETA = 6, 0.8
 

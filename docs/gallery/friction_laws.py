@@ -1,7 +1,6 @@
 """The same Hertz problem under three friction laws: frictionless, Tresca (a fixed stress bound)
 and Coulomb (a bound proportional to the normal stress). The tangential stress along the contact."""
 import matplotlib.pyplot as plt
-import numpy as np
 
 import contactmg as cm
 from contactmg.results import plots

@@ -1,13 +1,11 @@
 """Two elastic half cylinders pressed together with Coulomb friction F = 0.4, the lower one twice as
 stiff (dual mortar coupling on non-matching meshes): the contact stresses on the interface and
 the contact half-width against the two-body Hertz formula."""
-import matplotlib.pyplot as plt
 
 import contactmg as cm
 from contactmg.examples import cylinders
-from contactmg.results import plots
 
-from _common import out_dir
+from _common import stress_figure
 
 
 def main(argv=None):
@@ -17,17 +15,7 @@ def main(argv=None):
     load = abs(float(result.reaction[1]))
     upper, lower = cm.Material(cylinders.E, cylinders.NU), cm.Material(2 * cylinders.E, cylinders.NU)
     a_hertz = cylinders.two_body_halfwidth(load, cylinders.RADIUS, cylinders.RADIUS, upper, lower)
-    fig, ax = plt.subplots(figsize=(7, 4))
-    plots.plot_boundary_stress(result, ax=ax, margin=1.5)
-    ax.axvline(-a_hertz, color="k", ls=":", lw=1, label="Hertz half-width")
-    ax.axvline(a_hertz, color="k", ls=":", lw=1)
-    ax.set_title("two cylinders, E2 = 2 E1, Coulomb F = 0.4")
-    ax.legend(loc="best", fontsize=8)
-    fig.tight_layout()
-    path = out_dir(argv) / "two_cylinders.png"
-    fig.savefig(path, dpi=110)
-    return {"figure": fig, "path": path, "result": result, "hertz_halfwidth": a_hertz,
-            "halfwidth": result.halfwidth()}
+    return stress_figure(result, a_hertz, "two_cylinders", argv, title="two cylinders, E2 = 2 E1, Coulomb F = 0.4")
 
 
 if __name__ == "__main__":
