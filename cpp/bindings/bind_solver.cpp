@@ -2,7 +2,7 @@
 // the package reads. A solve releases the GIL; Ctrl-C and the progress callback take it back.
 #include <utility>
 #include "bindings/options.hpp"
-#include "contact_solver.hpp"
+#include "solver/contact_solver.hpp"
 
 namespace cmg::bindings {
 

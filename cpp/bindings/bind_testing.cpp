@@ -2,9 +2,9 @@
 // solves, bound restriction, Galerkin products, the coarsest solver's update, Anderson mixing),
 // the solver's internals (single sweeps, level matrices and lines, the linear correction) and the
 // memory bandwidth probes of the benchmarks. Nothing of the package calls them.
-#include "bandwidth.hpp"
+#include "base/bandwidth.hpp"
 #include "bindings/common.hpp"
-#include "contact_solver.hpp"
+#include "solver/contact_solver.hpp"
 
 namespace cmg::bindings {
 

@@ -5,7 +5,7 @@
 #include <malloc.h>
 #endif
 #include "bindings/common.hpp"
-#include "parallel.hpp"
+#include "base/parallel.hpp"
 
 PYBIND11_MODULE(_core, m) {
   using namespace cmg;
@@ -15,7 +15,7 @@ PYBIND11_MODULE(_core, m) {
   // Allocations of 1 MiB and more get pages of their own and go back to the system when freed.
   // glibc's default threshold grows to 32 MiB after the first large free, and then the level-sized
   // temporaries of setup and of a solve's results stayed in the heap: 28 MiB of the peak at level 9
-  // (docs/dev/decisions/0010-memory-peak.md).
+  // (docs/dev/decisions/0011-memory-release.md).
   mallopt(M_MMAP_THRESHOLD, 1 << 20);
 #endif
   bind_fem(m);

@@ -2,7 +2,7 @@
 // boundary measures; one generic routine per quantity, instantiated per cell type.
 #pragma once
 #include <cmath>
-#include "block_matrix.hpp"
+#include "base/block_matrix.hpp"
 #include "fem/element.hpp"
 
 namespace cmg {
@@ -58,11 +58,12 @@ void check_cells(const double* points, Index n_points, const Index* cells, Index
   }
 }
 
-// The block pattern of a mesh's couplings: row i holds, sorted, every node that shares a cell with
-// node i -- the pattern pattern_from_groups gives -- made row by row from the cells around each node
-// (32-bit cell ids) in two passes (lengths, then columns). Why: pattern_from_groups lists the k^2
-// 64-bit pairs of every cell before sorting them, 2.3x the bytes of the finished matrix for
-// tetrahedra and the peak of a 3D solve (issue 15: 301 of 775 MiB at tetrahedral sphere level 4).
+// The block pattern of a mesh's couplings: row i holds, sorted, every node that shares a cell with node
+// i -- the pattern pattern_from_groups gives -- made row by row from the cells around each node (32-bit
+// cell ids) in two passes (lengths, then columns). Why: pattern_from_groups lists the k^2 64-bit pairs
+// of every cell before sorting them, 2.3x the bytes of the finished matrix for tetrahedra and the peak
+// of a 3D solve (docs/dev/decisions/0011-memory-release.md: 301 of 775 MiB at tetrahedral sphere level
+// 4).
 template <int d>
 BlockMatrix<d> pattern_of_cells(Index n, const Index* cells, Index m, int k) {
   if (m > (Index)std::numeric_limits<ColIndex>::max()) return pattern_from_groups<d>(n, cells, m, k);

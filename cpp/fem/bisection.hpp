@@ -17,7 +17,7 @@
 #include <algorithm>
 #include <array>
 #include <utility>
-#include "refine_2d.hpp"  // RefinedMesh: the same output as uniform refinement
+#include "fem/refine_2d.hpp"  // RefinedMesh: the same output as uniform refinement
 
 namespace cmg {
 

@@ -37,7 +37,7 @@
 #include <cstdint>
 #include <unordered_map>
 #include <utility>
-#include "refine_2d.hpp"  // RefinedMesh: the same output as uniform refinement
+#include "fem/refine_2d.hpp"  // RefinedMesh: the same output as uniform refinement
 
 namespace cmg {
 

@@ -5,7 +5,7 @@
 #include <array>
 #include <string>
 #include <type_traits>
-#include "common.hpp"
+#include "base/common.hpp"
 
 namespace cmg {
 

@@ -6,7 +6,7 @@
 #pragma once
 #include <algorithm>
 #include <array>
-#include "refine_2d.hpp"
+#include "fem/refine_2d.hpp"
 
 namespace cmg {
 
@@ -56,7 +56,7 @@ constexpr int kBeyChildren[8][4] = {{0, 4, 5, 6}, {4, 1, 7, 8}, {5, 7, 2, 9}, {6
 // three diagonals (01-23, 02-13, 03-12, between midpoints of opposite edges) becomes 02-13; Bey's
 // own choice is kept unless another diagonal is shorter by a relative 1e-8, so ties (the Kuhn
 // simplex: 02-13 and 03-12 are equal) keep the Kuhn box a Kuhn box. Measured on the 12-split half
-// ball (issue 10): min dihedral angle 12.1 -> 17.9 degrees on levels 2-4 (18.0 on the coarse mesh),
+// ball: min dihedral angle 12.1 -> 17.9 degrees on levels 2-4 (18.0 on the coarse mesh),
 // mean radius ratio 0.54 -> 0.68, linear V(3,3) rate on level 4 0.54 -> 0.48; 3 similarity classes
 // on repeated refinement of a single tetrahedron as with Bey's fixed choice.
 constexpr int kDiagonalOrder[3][4] = {{1, 2, 0, 3}, {0, 1, 2, 3}, {3, 1, 0, 2}};

@@ -16,7 +16,7 @@ struct ContactNode {
   double coef;        // friction coefficient F_p (Coulomb) or the given bound (Tresca)
   double bound;       // the Tresca bound in force (= coef, or F_p |s_n| inside Algorithm 1)
   TangentMask free;   // tangential frame components not fixed by a Dirichlet condition
-  // Load paths (DESIGN section 12): the previous step's displacement in the frame (d values; only
+  // Load paths: the previous step's displacement in the frame (d values; only
   // its free tangential components are read), or nullptr for the first step from u = 0. Friction
   // then acts on the slip increment u_T - origin_T, and "stick" means no slip in this step.
   const double* origin = nullptr;
@@ -139,10 +139,11 @@ bool linearize_node(const ContactNode& p, const double* u, double* r, std::uint8
   return bounded;
 }
 
-// What the coarse problem's frozen bound leaves out at a sliding node (issue 11, seventh part): the
-// friction force s t (t = v_T / |v_T|) moves with the normal residual r_n by s'(r_n) t, so the
-// Jacobian's tangential rows are K_T - s' t K_n, i.e. J = K + w e_n^T K with w = -s' t (zero normal
-// component). Returns w, zero where the node does not slide or its bound does not move with r_n.
+// What the coarse problem's frozen bound leaves out at a sliding node
+// (docs/dev/decisions/0006-petrov-galerkin-coupling.md): the friction force s t (t = v_T / |v_T|) moves
+// with the normal residual r_n by s'(r_n) t, so the Jacobian's tangential rows are K_T - s' t K_n, i.e.
+// J = K + w e_n^T K with w = -s' t (zero normal component). Returns w, zero where the node does not
+// slide or its bound does not move with r_n.
 template <class L, int d>
 Vec<d> bound_coupling(const ContactNode& p, const double* u, double r_n) {
   Vec<d> w = Vec<d>::Zero();

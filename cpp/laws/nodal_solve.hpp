@@ -1,4 +1,4 @@
-// The exact local solver of the nonlinear Gauss-Seidel smoother (DESIGN section 3):
+// The exact local solver of the nonlinear Gauss-Seidel smoother:
 //   minimize 1/2 x^T B x - b^T x + s |x_T|  subject to x_n <= g,
 // in the node's frame (component 0 normal, the rest tangential). One routine for d = 2 and 3.
 // The cases x_n = g and x_T = 0 are assigned exactly, so "active" and "sticking" are exact tests.
@@ -9,7 +9,7 @@
 #pragma once
 #include <algorithm>
 #include <cmath>
-#include "common.hpp"
+#include "base/common.hpp"
 
 namespace cmg {
 

@@ -1,5 +1,5 @@
 // Tresca friction: a given bound s_p, acting at every contact node whether it touches or not
-// (DESIGN section 4). Algorithm 1 solves a sequence of these with s_p = F_p |s_n(u^{k-1})|.
+// (the problem of the seed paper's Algorithm 1). Algorithm 1 solves a sequence of these with s_p = F_p |s_n(u^{k-1})|.
 #pragma once
 #include "laws/contact_node.hpp"
 

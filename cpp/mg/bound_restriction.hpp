@@ -1,4 +1,5 @@
-// Restriction of correction bounds to the next coarser level (DESIGN section 4, step 3).
+// Restriction of correction bounds to the next coarser level
+// (docs/dev/decisions/0001-monotone-restriction.md).
 #pragma once
 #include <algorithm>
 #include <cmath>
@@ -45,11 +46,11 @@ void restrict_bounds(const Prolongation<d>& P, const std::uint8_t* mask, const d
   for (Index i = 0; i < P.rows; ++i) restrict_row_bounds<d>(P, mask, i, lo_f + i * d, hi_f + i * d, lo_c, hi_c);
 }
 
-// The same for the slack lo - x, hi - x that remains to an iterate x on the fine level, formed per
-// row (a scratch pair of fine vectors and a pass less, issue 15; the same bits). bounded (per fine
-// row, or nullptr): the rows with a finite bound; the others add nothing and are skipped (this
-// serial pass over every fine row of a level ran at each visit of the coarse cycle; the bounded
-// rows are the few near the contact zone).
+// The same for the slack lo - x, hi - x that remains to an iterate x on the fine level, formed per row
+// (a scratch pair of fine vectors and a pass less, docs/dev/decisions/0011-memory-release.md; the same
+// bits). bounded (per fine row, or nullptr): the rows with a finite bound; the others add nothing and
+// are skipped (this serial pass over every fine row of a level ran at each visit of the coarse cycle;
+// the bounded rows are the few near the contact zone).
 template <int d>
 void restrict_slack(const Prolongation<d>& P, const double* lo_f, const double* hi_f, const double* x, double* lo_c, double* hi_c,
                     const std::uint8_t* bounded = nullptr) {
@@ -63,8 +64,9 @@ void restrict_slack(const Prolongation<d>& P, const double* lo_f, const double* 
   }
 }
 
-// Fine correction bounds that can be finite only at some nodes (the contact nodes): lo, hi hold
-// d entries for each of `nodes` (the fine vectors of bounds were 16 bytes per dof, issue 15).
+// Fine correction bounds that can be finite only at some nodes (the contact nodes): lo, hi hold d
+// entries for each of `nodes` (the fine vectors of bounds were 16 bytes per dof,
+// docs/dev/decisions/0011-memory-release.md).
 struct NodeBounds {
   const std::vector<Index>* nodes = nullptr;  // nullptr: no bounds
   const double* lo = nullptr;

@@ -1,7 +1,7 @@
 // Exact solves with the coarsest-level matrix, kept current across incremental coarse updates by a
 // low-rank correction of one kept factorization instead of a new factorization per update.
 //
-// Why (issue 10): on the 3D sphere (tetrahedra, level 3, F = 0.4) the friction Hessian of the
+// Why: on the 3D sphere (tetrahedra, level 3, F = 0.4) the friction Hessian of the
 // sliding nodes changes in every cycle, so the coarse levels are updated in every cycle; the
 // update itself is cheap (proportional to the change), but the coarsest matrix (2,286 dofs) was
 // analysed and factorized again each time: ~40 ms, a third of an Algorithm-2 cycle and most of
@@ -26,8 +26,8 @@
 #include <Eigen/Dense>
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
-#include "common.hpp"
-#include "parallel.hpp"
+#include "base/common.hpp"
+#include "base/parallel.hpp"
 
 namespace cmg {
 

@@ -104,7 +104,8 @@ class CoarseCycle {
     parallel_for((Index)x.size(), [&](Index k) { x[k] = 0.0; }, 8 * kParallelGrain);
   }
 
-  // (on all threads: the serial loops of a cycle hold back the second thread, issue 15)
+  // (on all threads: the serial loops of a cycle hold back the second thread,
+  // docs/dev/decisions/0003-coloured-gauss-seidel.md)
   static void set_bounded(Vectors& L, bool bounded) {
     const Index n = (Index)L.bounded.size();
     L.any_bounds = parallel_sum(n, [&](Index i) {

@@ -64,8 +64,8 @@ template <int d>
 class GalerkinProduct {
  public:
   // P's transposed pattern is formed per call and dropped after: kept, a transposed copy of every
-  // prolongation was about 35 bytes per fine dof at level 9 (issue 15); forming it is one pass over
-  // P, small beside the product. The blocks are read from P itself.
+  // prolongation was about 35 bytes per fine dof at level 9 (docs/dev/decisions/0011-memory-release.md);
+  // forming it is one pass over P, small beside the product. The blocks are read from P itself.
   void build(const BlockMatrix<d>& A, const Prolongation<d>& P, const std::uint8_t* mask, BlockMatrix<d>& C) {
     const TransposedPattern<d> PT(P);
     if (!symbolic_done_) {

@@ -326,7 +326,7 @@ class GalerkinHierarchy {
   std::vector<GalerkinProduct<d>> gp_;
   std::vector<std::vector<DeltaEntry>> delta_;  // pending incremental change of each level's A
   // position in A -> its entry of delta_: a map of the few touched blocks (a vector over every
-  // coarse block was 5 bytes a dof at level 9, issue 15)
+  // coarse block was 5 bytes a dof at level 9, docs/dev/decisions/0011-memory-release.md)
   std::vector<std::unordered_map<Index, std::int32_t>> slot_;
   mutable CoarsestSolver coarsest_;
   int rebuilds_ = 0, incremental_ = 0;

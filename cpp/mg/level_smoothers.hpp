@@ -2,7 +2,7 @@
 // rows of a SweepOrder; and the inverted diagonal blocks they use.
 #pragma once
 #include <algorithm>
-#include "block_matrix.hpp"
+#include "base/block_matrix.hpp"
 #include "mg/sweep_order.hpp"
 
 namespace cmg {

@@ -10,7 +10,7 @@
 #pragma once
 #include <cmath>
 #include <vector>
-#include "parallel.hpp"
+#include "base/parallel.hpp"
 
 namespace cmg {
 

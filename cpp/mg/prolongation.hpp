@@ -1,11 +1,11 @@
-// The prolongation between two consecutive levels as scalar weights: nodal interpolation moves
-// every component of a coarse node alike, so a block of P is w I -- or R_i^T w on a fine row i
-// whose node carries a contact frame R_i (P <- T^T P, basis_transform.hpp). d x d blocks of
-// doubles were 4 (2D) to 9 (3D) times the bytes for the same information: 47 bytes a dof at
-// level 9 in 2D (issue 15), now 14; and the transfers stream a quarter of the bytes.
+// The prolongation between two consecutive levels as scalar weights: nodal interpolation moves every
+// component of a coarse node alike, so a block of P is w I -- or R_i^T w on a fine row i whose node
+// carries a contact frame R_i (P <- T^T P, model/basis_transform.hpp). d x d blocks of doubles were 4
+// (2D) to 9 (3D) times the bytes for the same information: 47 bytes a dof at level 9 in 2D
+// (docs/dev/decisions/0011-memory-release.md), now 14; and the transfers stream a quarter of the bytes.
 #pragma once
 #include <algorithm>
-#include "block_matrix.hpp"
+#include "base/block_matrix.hpp"
 
 namespace cmg {
 
@@ -46,7 +46,7 @@ struct Prolongation {
 };
 
 // Prolongation from interpolation weights (fine node <- coarse nodes), canonical basis on both
-// levels (a basis transform of the fine level is applied afterwards, basis_transform.hpp).
+// levels (a basis transform of the fine level is applied afterwards, model/basis_transform.hpp).
 template <int d>
 Prolongation<d> make_prolongation(Index n_fine, Index n_coarse, const Index* ptr, const Index* parent, const double* weight) {
   Prolongation<d> P;

@@ -4,8 +4,8 @@
 // updated at once (threads); the colouring does not depend on the thread count, so neither does
 // the result.
 #pragma once
-#include "block_matrix.hpp"
-#include "parallel.hpp"
+#include "base/block_matrix.hpp"
+#include "base/parallel.hpp"
 #include "solver/solver_options.hpp"
 
 namespace cmg {
@@ -57,7 +57,7 @@ class SweepOrder {
     std::vector<Index> sorted = rows;
     std::sort(sorted.begin(), sorted.end());
     for (Index i : sorted) S.rows_[fill[colour[i]]++] = i;
-    // Stored by colours (renumbering.hpp), every colour is the range colour_ptr_[c] .. [c + 1):
+    // Stored by colours (mg/renumbering.hpp), every colour is the range colour_ptr_[c] .. [c + 1):
     // the list of rows is then the identity and is dropped.
     S.contiguous_ = true;
     for (std::size_t k = 0; k < S.rows_.size() && S.contiguous_; ++k) S.contiguous_ = S.rows_[k] == (Index)k;
@@ -65,14 +65,14 @@ class SweepOrder {
     return S;
   }
 
-  // f(i) for the rows of a level of n rows, in order (forward) or reversed; coloured: the colours
-  // in order or reversed, the rows of one colour on all threads (f must then touch row i only).
-  // One parallel region per sweep with a barrier between colours, not a region per colour: each
-  // region start wakes the second thread, which sleeps between regions (OMP_WAIT_POLICY=PASSIVE),
-  // and a fork-join costs about two such hand-overs where a barrier costs one (issue 15). Sweeps
-  // whose colours average fewer than kSerialColourRows rows run on the calling thread: the hand-overs
-  // would cost more than the second thread saves. Rows of one colour are independent, so the
-  // result is the same bit for bit either way.
+  // f(i) for the rows of a level of n rows, in order (forward) or reversed; coloured: the colours in
+  // order or reversed, the rows of one colour on all threads (f must then touch row i only). One
+  // parallel region per sweep with a barrier between colours, not a region per colour: each region start
+  // wakes the second thread, which sleeps between regions (OMP_WAIT_POLICY=PASSIVE), and a fork-join
+  // costs about two such hand-overs where a barrier costs one
+  // (docs/dev/decisions/0003-coloured-gauss-seidel.md). Sweeps whose colours average fewer than
+  // kSerialColourRows rows run on the calling thread: the hand-overs would cost more than the second
+  // thread saves. Rows of one colour are independent, so the result is the same bit for bit either way.
   template <class F>
   void visit(Index n, bool forward, F&& f) const {
     if (coloured()) {

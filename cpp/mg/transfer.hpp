@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include "mg/prolongation.hpp"
-#include "parallel.hpp"
+#include "base/parallel.hpp"
 
 namespace cmg {
 
@@ -85,7 +85,8 @@ void restrict_residual(const Prolongation<d>& P, const std::uint8_t* mask, const
 // y_coarse = P^T (b - A x) in one pass over A: each row's residual restricted as it is formed
 // (BlockMatrix::residual_row), never stored -- a level's residual pass wrote a vector that the
 // restriction read straight back (32 of the ~290 bytes a row of a 2D coarse level streamed;
-// issue 15). The same rows, sums and order as A.residual then restrict_residual: the same bits.
+// docs/dev/decisions/0013-fused-residual.md). The same rows, sums and order as A.residual then
+// restrict_residual: the same bits.
 template <int d>
 void restrict_level_residual(const BlockMatrix<d>& A, const Prolongation<d>& P, const double* x, const double* b, double* yc,
                              double* scratch) {

@@ -9,7 +9,7 @@
 // truncated: w = 0 there. With nu1 = nu2 and a V-cycle the cycle is a symmetric operator (the
 // preconditioner of pcg.hpp); other choices are only nearly symmetric, which the flexible PCG takes.
 #pragma once
-#include "basis_transform.hpp"
+#include "model/basis_transform.hpp"
 #include "mg/cycle.hpp"
 #include "mg/line_smoother.hpp"
 

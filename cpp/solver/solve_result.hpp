@@ -2,7 +2,7 @@
 #pragma once
 #include <limits>
 #include <string>
-#include "common.hpp"
+#include "base/common.hpp"
 
 namespace cmg {
 

@@ -6,7 +6,7 @@
 #pragma once
 #include <cmath>
 #include <string>
-#include "common.hpp"
+#include "base/common.hpp"
 
 namespace cmg {
 
@@ -73,7 +73,7 @@ struct SolverOptions {
   // without contact; coarse levels: rows without bounds); 1 = plain Gauss-Seidel. Nodal block
   // Gauss-Seidel on P1 elasticity levels off near 0.34 per F(3,3) cycle, the symmetric over-relaxed
   // sweep costs the same and contracts by 0.22 with 1.4 on the adaptive Hertz levels
-  // (docs/dev/decisions/0003-over-relaxation.md). Any 0 < omega < 2 keeps each such step an energy
+  // (docs/dev/decisions/0005-over-relaxation.md). Any 0 < omega < 2 keeps each such step an energy
   // decrease (a node's quadratic falls by (omega - omega^2 / 2) times its exact minimum), so the
   // monotone cycles stay monotone; bounded rows and contact nodes keep their exact solves.
   double omega = 1.0;
@@ -82,7 +82,7 @@ struct SolverOptions {
   // Between two coarse corrections the smoother is nu2 backward sweeps then nu1 forward ones, and
   // splitting the relaxation contracts P1 elasticity's linear V(3,3) by 0.14 on the unit square
   // level 7 where the symmetric 1.3 gives 0.26, at the same cost
-  // (docs/dev/decisions/0003-over-relaxation.md). Any 0 < omega_post < 2 keeps the cycles monotone.
+  // (docs/dev/decisions/0005-over-relaxation.md). Any 0 < omega_post < 2 keeps the cycles monotone.
   double omega_post = 0.0;
   double fixed_point_tol = 1e-9;  // Algorithm 1: relative change of s_n at which it stops
   int fixed_point_max = 100;      // Algorithm 1: outer iterations at most
@@ -98,23 +98,23 @@ struct SolverOptions {
   int threads = 0;  // threads of the sweeps, products and norms; 0: all cores (the result does not depend on it)
   // Gauss-Seidel order of every sweep (fine nonlinear, coarse projected). At construction it also
   // decides the storage: coloured stores every level but the coarsest by colours
-  // (base/renumbering.hpp), so that a coloured sweep streams memory.
+  // (mg/renumbering.hpp), so that a coloured sweep streams memory.
   Ordering ordering = Ordering::Lexicographic;
   // Algorithm 2 (a law whose coarse problem freezes a bound): in every cycle but the first, level
   // L-1's matrix also carries the sliding nodes' Petrov-Galerkin coupling, with a fallback to the
   // symmetric one (steps/petrov_galerkin_coupling.hpp). Off by default: that coarse correction is
   // not an energy descent; it pays on 2D adaptive hierarchies
-  // (docs/dev/decisions/0005-petrov-galerkin-coupling.md).
+  // (docs/dev/decisions/0006-petrov-galerkin-coupling.md).
   bool petrov_galerkin = false;
   // Algorithm 2: one more visit of the contact nodes after every fine sweep, the sliding ones in
   // the upwind order of the Coulomb Jacobian (steps/upwind_contact_sweep.hpp;
-  // docs/dev/decisions/0006-upwind-contact-sweep.md).
+  // docs/dev/decisions/0007-upwind-contact-sweep.md).
   bool upwind_contact_sweep = false;
   // The coarse correction without the gap bounds of the inactive contact nodes, projected onto the
   // gap at the fine level and taken with the exact line search of the frozen-bound energy. Where a
   // contact frame is not a signed permutation of the axes, the monotone restriction turns a node's
   // gap bound into bounds on every coarse component it touches, and a node closing on the obstacle
-  // holds back the coarse motions around it (docs/dev/decisions/0007-projected-coarse-correction.md).
+  // holds back the coarse motions around it (docs/dev/decisions/0008-projected-coarse-correction.md).
   // Every step still lowers the frozen energy.
   bool projected_coarse_correction = false;
 

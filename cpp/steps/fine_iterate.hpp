@@ -1,6 +1,6 @@
 // The fine-level iterate (local frames, Dirichlet values in place) with its tracked product A u.
 #pragma once
-#include "contact_problem.hpp"
+#include "model/contact_problem.hpp"
 
 namespace cmg {
 

@@ -44,12 +44,12 @@ struct BuiltLinearization {
 };
 
 // The fine vectors of a cycle beyond the iterate's own: r, u_old and the Anderson history (six
-// more once a Coulomb solve slides). A solver keeps one across its solves (contact_solver.hpp):
+// more once a Coulomb solve slides). A solver keeps one across its solves (solver/contact_solver.hpp):
 // a fresh step per solve allocated them again, 8 fine vectors of pages first touched inside the
 // solve (at level 9, 37,000 minor faults a solve, ~2,900 a cycle; the Anderson slots' in its
 // "norm" phase). On a VM a first touch of memory the guest had handed back costs up to ~50 us a
 // page (0.4-0.5 s of system time a cycle while the history filled;
-// docs/dev/decisions/0009-kept-cycle-workspace.md).
+// docs/dev/decisions/0011-memory-release.md).
 
 struct CycleWorkspace {
   std::vector<double> r, old;
@@ -92,17 +92,19 @@ class MonotoneMultigridStep {
     std::vector<double>& u = it_.u;
     const BlockMatrix<d>& A = P_.matrix();
     const std::vector<double>& f = P_.load();
-    // on all threads: a plain vector copy was a serial pass over two fine vectors (issue 15)
+    // on all threads: a plain vector copy was a serial pass over two fine vectors
+    // (docs/dev/decisions/0003-coloured-gauss-seidel.md)
     parallel_for((Index)u.size(), [&](Index k) { old_[k] = u[k]; });
     for (int s = 0; s < opt_.nu1; ++s) {
       Smoother::sweep(P_, u.data(), true, order_);
       if (upwind_.on()) upwind_.visit(P_, u.data());
     }
     pc.lap(Phase::PreSmooth);
-    // The fine residual r = f - A u: at the contact rows now (the linearization reads them and adds
-    // the friction gradient), every other row where the coarse correction restricts it, formed as
-    // it is restricted (BlockMatrix::residual_row): a residual pass wrote a fine vector that the
-    // restriction read straight back (issue 15). The same sums: the same bits as a residual pass.
+    // The fine residual r = f - A u: at the contact rows now (the linearization reads them and adds the
+    // friction gradient), every other row where the coarse correction restricts it, formed as it is
+    // restricted (BlockMatrix::residual_row): a residual pass wrote a fine vector that the restriction
+    // read straight back (docs/dev/decisions/0013-fused-residual.md). The same sums: the same bits as a
+    // residual pass.
     constexpr Index ahead = kPrefetchValueRows;
     for (Index c = 0; c < P_.num_contact(); ++c)
       A.residual_row(A.values.data(), u.data(), f.data(), P_.contact_node(c), ahead, r_.data() + d * P_.contact_node(c));
@@ -111,9 +113,9 @@ class MonotoneMultigridStep {
     pc.lap(Phase::Linearize);
     const bool state_changed = mask_ != built_.mask;
     rebuilt = built_.update(H_, A, mask_, hessian_);
-    // every cycle but the first, for the sliding nodes of this one: waiting until the truncation
-    // settles left the settling cycles at the frozen bound's slow rate (adaptive Hertz level 11,
-    // F = 2: 16 cycles settled only, 13 in every cycle; issue 11, tenth part)
+    // every cycle but the first, for the sliding nodes of this one: waiting until the truncation settles
+    // left the settling cycles at the frozen bound's slow rate (adaptive Hertz level 11, F = 2: 16
+    // cycles settled only, 13 in every cycle; docs/dev/decisions/0006-petrov-galerkin-coupling.md)
     pg_.bring(A, mask_.data(), coupling_, !first_);
     first_ = false;
     pc.lap(Phase::CoarseUpdate);
@@ -170,7 +172,7 @@ class MonotoneMultigridStep {
     // Au += A (u - u_old) and e = |u - u_old|_A^2 in one pass (were four: difference, product,
     // update, dot); sums over fixed chunks of rows, so the same on any thread count
     const double step = measured >= 0 ? measured : std::sqrt(std::max(parallel_sum(A.rows, [&](Index i) {
-      A.prefetch_ahead(i, u.data(), old_.data());  // two gathers a block (block_matrix.hpp says why)
+      A.prefetch_ahead(i, u.data(), old_.data());  // two gathers a block (base/block_matrix.hpp says why)
       prefetch_row_values<d>(A.values.data(), A.indptr.data(), i, ahead, A.rows);
       Vec<d> y = Vec<d>::Zero();
       accumulate_block_differences<d>(A.values.data(), A.indices.data(), A.indptr[i], A.indptr[i + 1], u.data(), old_.data(), y.data());
@@ -363,7 +365,8 @@ class MonotoneMultigridStep {
   CycleWorkspace own_;  // used when the caller keeps none (then freed with the step)
   CycleWorkspace& ws_;
   std::vector<std::uint8_t> mask_;
-  // the iterate's own (u, A u) aside, a cycle needs only r and u_old (issue 15)
+  // the iterate's own (u, A u) aside, a cycle needs only r and u_old
+  // (docs/dev/decisions/0011-memory-release.md)
   std::vector<double>& r_;
   std::vector<double>& old_;
   std::vector<double> lo_, hi_;  // nc * d

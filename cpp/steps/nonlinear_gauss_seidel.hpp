@@ -3,7 +3,7 @@
 // a fixed point of a sweep (the nodal rules keep every local solution), which makes the sweep
 // both the smoother and the independent stopping check.
 #pragma once
-#include "contact_problem.hpp"
+#include "model/contact_problem.hpp"
 #include "mg/level_smoothers.hpp"
 
 namespace cmg {
@@ -39,10 +39,10 @@ struct NonlinearGaussSeidel {
   }
 
   // The rows [b, e) of one colour (a level stored by colours). Nearly every row is neither a contact
-  // node nor one with a special inverse: those run in this loop, with the matrix arrays in
-  // registers, one flag byte read per row, the inverse formed inline and x prefetched at the
-  // columns of the row kPrefetchRows ahead (the neighbours' x are in other colours' ranges: their
-  // loads stalled the sweep, issue 15). The rest go through row_update, out of line. The same
+  // node nor one with a special inverse: those run in this loop, with the matrix arrays in registers,
+  // one flag byte read per row, the inverse formed inline and x prefetched at the columns of the row
+  // kPrefetchRows ahead (the neighbours' x are in other colours' ranges: their loads stalled the sweep,
+  // docs/dev/decisions/0015-locality-order.md). The rest go through row_update, out of line. The same
   // sums and products in the same order as row_update: the same bits (the test above).
   static void sweep_range(const ContactProblem<d>& P, double* u, Index b, Index e, double omega) {
     using CP = ContactProblem<d>;

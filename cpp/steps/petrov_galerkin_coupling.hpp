@@ -1,17 +1,18 @@
-// The Petrov-Galerkin coupling of the sliding nodes on the top coarse level, in every cycle of Algorithm 2
-// but the first (issue 11, seventh and tenth parts; SolverOptions::petrov_galerkin, off in the core; the
-// Python problem turns it on for Coulomb friction on 2D adaptive hierarchies). Until stop 25 it waited for
-// a settled contact state (the truncation of the cycle before): that left the settling cycles at the frozen
-// bound's slow rate (adaptive level 11, F = 2: 16 cycles against 13 in every cycle).
+// The Petrov-Galerkin coupling of the sliding nodes on the top coarse level, in every cycle of Algorithm
+// 2 but the first (docs/dev/decisions/0006-petrov-galerkin-coupling.md; SolverOptions::petrov_galerkin,
+// off in the core; the Python problem turns it on for Coulomb friction on 2D adaptive hierarchies). An
+// earlier version waited for a settled contact state (the truncation of the cycle before): that left the
+// settling cycles at the frozen bound's slow rate (adaptive level 11, F = 2: 16 cycles against 13 in
+// every cycle).
 //
-// Why: Algorithm 2's coarse problem freezes the bound F |s_n| of a sliding node, so its matrix is
-// the symmetric P~^T K P~, while the Jacobian of the settled state has the tangential rows
-// K_T - F t K_n there (contact_node.hpp, bound_coupling: J = K + sum_p w_p e_pn^T K). On adaptive
-// Hertz level 11 that is the settled cycle's growth with F (docs/history/adaptive.md, sixth part):
-// in a three-grid model the term P~^T (J - K) P~ added on level L-1 alone -- the levels below stay
-// symmetric -- takes the settled rate at F = 2 / 5 from 0.435 / 0.537 to 0.287 / 0.353. The term
-// has rank k = the sliding nodes: (P~^T w_p) (e_pn^T K P~), the parents of p times the parents of
-// p's neighbours, blocks inside the Galerkin pattern of P^T K P (GalerkinHierarchy::set_top_overlay).
+// Why: Algorithm 2's coarse problem freezes the bound F |s_n| of a sliding node, so its matrix is the
+// symmetric P~^T K P~, while the Jacobian of the settled state has the tangential rows K_T - F t K_n
+// there (contact_node.hpp, bound_coupling: J = K + sum_p w_p e_pn^T K). On adaptive Hertz level 11 that
+// is the settled cycle's growth with F (docs/dev/decisions/0006-petrov-galerkin-coupling.md): in a
+// three-grid model the term P~^T (J - K) P~ added on level L-1 alone -- the levels below stay symmetric
+// -- takes the settled rate at F = 2 / 5 from 0.435 / 0.537 to 0.287 / 0.353. The term has rank k = the
+// sliding nodes: (P~^T w_p) (e_pn^T K P~), the parents of p times the parents of p's neighbours, blocks
+// inside the Galerkin pattern of P^T K P (GalerkinHierarchy::set_top_overlay).
 //
 // What it gives up: the coarse correction is no longer the minimization of the frozen energy, so it
 // need not lower the energy (the bounds of the correction, hence feasibility, are kept as they are).

@@ -1,10 +1,10 @@
 // Anderson acceleration of the cycle map x -> G(x) once the contact state has settled.
 //
-// Why: Algorithm 2's coarse problem freezes the Coulomb bound F |s_n| of the sliding nodes (it does
-// not see that a coarse correction changes their normal force, hence their friction force). Once
-// the contact state stops changing, the cycle is a fixed affine map near the solution, and what
-// the coarse problem misses shows as a slow linear contraction: 0.7 per cycle at F = 5 on uniform
-// Hertz level 9, 0.8 at F = 40 on adaptive level 9 (issue 14). Anderson mixing of the last few
+// Why: Algorithm 2's coarse problem freezes the Coulomb bound F |s_n| of the sliding nodes (it does not
+// see that a coarse correction changes their normal force, hence their friction force). Once the contact
+// state stops changing, the cycle is a fixed affine map near the solution, and what the coarse problem
+// misses shows as a slow linear contraction: 0.7 per cycle at F = 5 on uniform Hertz level 9, 0.8 at F =
+// 40 on adaptive level 9 (docs/dev/decisions/0010-settled-anderson.md). Anderson mixing of the last few
 // cycles removes those few slow modes, as a Krylov method would on the affine map.
 //
 // What keeps it safe (no parameter a user sets; the depth is fixed here):
@@ -24,7 +24,7 @@
 #include <algorithm>
 #include <deque>
 #include <vector>
-#include "parallel.hpp"
+#include "base/parallel.hpp"
 
 namespace cmg {
 
@@ -44,7 +44,7 @@ class SettledAnderson {
   }
   bool last_accelerated() const { return accelerated_; }
   // Every slot sized for n entries now, their pages touched here and not in the cycles where the
-  // history first fills (a kept workspace's first solve: issue 15, a first touch costs up to ~50 us
+  // history first fills (a kept workspace's first solve: a first touch costs up to ~50 us
   // a page on this project's VM). Every entry is written before it is read: no bit changes.
   void reserve(Index n) {
     slot_.resize(kDepth);
@@ -55,16 +55,16 @@ class SettledAnderson {
   // iterate when `admit(candidate, plain)` accepts it (it may adjust the candidate; plain is G(x)).
   // Returns whether it did. restart: forget the history first (the caller's contact state changed).
   //
-  // Storage (issue 15): kDepth slots of two fine vectors, no more. A slot holds either a pair of
-  // the history (dx = x - x', dg = g - g', g = G(x) - x) or the last iterate (x', G(x')): the new
-  // pair is formed in place over the last iterate, and the next last iterate takes the slot of
-  // the oldest pair, which the next step would drop (the textbook layout held the history, x', g',
-  // g and a candidate: 10 fine vectors, 80 bytes a dof in 2D). Passes: one forms the new pair with
-  // every dot product of the least-squares problem (the Gram entries of older pairs are kept: the
-  // pairs do not change), one forms the candidate in gx and keeps G(x) as the next last iterate
-  // (were some 40 vector reads and writes a step, now 19). Every value is the one of the textbook
-  // layout bit for bit: g' = G(x') - x' is formed again from the same operands, and the sums run
-  // over the same chunks in the same order (parallel_sums).
+  // Storage (docs/dev/decisions/0011-memory-release.md): kDepth slots of two fine vectors, no more. A
+  // slot holds either a pair of the history (dx = x - x', dg = g - g', g = G(x) - x) or the last iterate
+  // (x', G(x')): the new pair is formed in place over the last iterate, and the next last iterate takes
+  // the slot of the oldest pair, which the next step would drop (the textbook layout held the history,
+  // x', g', g and a candidate: 10 fine vectors, 80 bytes a dof in 2D). Passes: one forms the new pair
+  // with every dot product of the least-squares problem (the Gram entries of older pairs are kept: the
+  // pairs do not change), one forms the candidate in gx and keeps G(x) as the next last iterate (were
+  // some 40 vector reads and writes a step, now 19). Every value is the one of the textbook layout bit
+  // for bit: g' = G(x') - x' is formed again from the same operands, and the sums run over the same
+  // chunks in the same order (parallel_sums).
   template <class Admit>
   bool step(const std::vector<double>& x, std::vector<double>& gx, Admit&& admit, bool restart = false) {
     if (restart) {  // this cycle's pair spans two states: the history starts with the next one

@@ -1,14 +1,14 @@
-// A second coarse correction in the space where every contact dof is frozen (issue 13, two
-// bodies): for a mortar-transformed problem the contact dofs are the relative displacements of the
-// nonmortar nodes, so this space holds the common motions of touching bodies -- the interface
-// moving as one, as it must where the stiffer body pushes it -- which leave every gap, every slip
-// and so the friction term unchanged: a plain linear coarse cycle without bounds, energy
-// decreasing and feasible by construction. Algorithm 2's own coarse correction bounds each body's
-// coarse unknowns by a part of every nearby slack (mg/bound_restriction.hpp), which cuts such a
-// motion as if it closed the gap; with unequal materials its cycle count then grew with the level.
-// The truncation is fixed, so the hierarchy is built once.
+// A second coarse correction in the space where every contact dof is frozen
+// (docs/dev/decisions/0009-tied-correction.md; two bodies): for a mortar-transformed problem the contact
+// dofs are the relative displacements of the nonmortar nodes, so this space holds the common motions of
+// touching bodies -- the interface moving as one, as it must where the stiffer body pushes it -- which
+// leave every gap, every slip and so the friction term unchanged: a plain linear coarse cycle without
+// bounds, energy decreasing and feasible by construction. Algorithm 2's own coarse correction bounds
+// each body's coarse unknowns by a part of every nearby slack (mg/bound_restriction.hpp), which cuts
+// such a motion as if it closed the gap; with unequal materials its cycle count then grew with the
+// level. The truncation is fixed, so the hierarchy is built once.
 #pragma once
-#include "contact_problem.hpp"
+#include "model/contact_problem.hpp"
 #include "mg/cycle.hpp"
 
 namespace cmg {

@@ -1,5 +1,5 @@
-// One more Gauss-Seidel visit of the contact nodes after every fine sweep of Algorithm 2, the
-// sliding ones in the upwind order of the Coulomb Jacobian (issue 11, eleventh part;
+// One more Gauss-Seidel visit of the contact nodes after every fine sweep of Algorithm 2, the sliding
+// ones in the upwind order of the Coulomb Jacobian (docs/dev/decisions/0007-upwind-contact-sweep.md;
 // SolverOptions::upwind_contact_sweep, off in the core; the Python problem turns it on for Coulomb
 // friction on 2D adaptive hierarchies).
 //
@@ -19,7 +19,7 @@
 // that extra visit alone took level 11 from 13 to 12. All of them, not only the zone in contact and
 // a ring around it: the zone alone cost levels 3-9 a cycle at 11 of the 50 (level, F) pairs of the
 // adaptive Table 1. One visit, not a solve of the chain: two or three visits a sweep made F = 5 32
-// and 200 cycles (with the bulk held the chain's own system is near-singular; the sixth part's exact
+// and 200 cycles (with the bulk held the chain's own system is near-singular; an exact
 // chain solve blew the error up).
 //
 // Where friction dominates a node's tangential row the visit is left out (friction_does_not_dominate:

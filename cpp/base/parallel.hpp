@@ -5,7 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <vector>
-#include "common.hpp"
+#include "base/common.hpp"
 #ifdef CONTACTMG_OPENMP
 #include <omp.h>
 #endif

@@ -1,7 +1,7 @@
 // Block sparse rows with fixed d x d blocks: the one matrix type of the core.
 #pragma once
 #include <algorithm>
-#include "parallel.hpp"
+#include "base/parallel.hpp"
 
 namespace cmg {
 
@@ -13,17 +13,18 @@ inline void check_block_count(Index n) {
     throw InputError("too many nodes for one matrix (" + std::to_string(n) + ")");
 }
 
-// The row passes over a level (sweeps, products, residuals) prefetch x at the block columns of
-// the row this far ahead. On a level stored by colours a row's columns are rows of the other
-// colours -- loads from several other ranges of x, which the hardware prefetcher does not
-// follow -- and those loads were where the fine sweep stalled (issue 15). About two rows' worth
-// of memory latency ahead; 4-32 measured alike on the level-9 Hertz matrix.
+// The row passes over a level (sweeps, products, residuals) prefetch x at the block columns of the row
+// this far ahead. On a level stored by colours a row's columns are rows of the other colours -- loads
+// from several other ranges of x, which the hardware prefetcher does not follow -- and those loads were
+// where the fine sweep stalled (docs/dev/decisions/0015-locality-order.md). About two rows' worth of
+// memory latency ahead; 4-32 measured alike on the level-9 Hertz matrix.
 constexpr Index kPrefetchRows = 8;
 
-// The prefetch helpers are forced inline: a function holding nothing but __builtin_prefetch has no
-// side effect in GCC's eyes (IPA pure-const), so where it was not inlined GCC 12 deleted the call
-// itself -- the residual, the product and the norm passes of main prefetched nothing (issue 15;
-// 48 prefetch instructions in the whole module, all in the fine sweep's inlined kernel).
+// The prefetch helpers are forced inline: a function holding nothing but __builtin_prefetch has no side
+// effect in GCC's eyes (IPA pure-const), so where it was not inlined GCC 12 deleted the call itself --
+// the residual, the product and the norm passes prefetched nothing
+// (docs/dev/decisions/0015-locality-order.md; 48 prefetch instructions in the whole module, all in the
+// fine sweep's inlined kernel).
 #define CMG_PREFETCH_INLINE inline __attribute__((always_inline))
 
 // Prefetch x at the block columns k in [b, e) (a hint: no result depends on it).
@@ -35,7 +36,7 @@ CMG_PREFETCH_INLINE void prefetch_block_columns(const ColIndex* indices, Index b
 // The row passes also prefetch the matrix values of the row this many rows ahead. The values are
 // one sequential stream, but beside the gathers of x and the other arrays the hardware prefetcher
 // did not keep ahead of it: level 9, one thread, fine sweep 35.8 -> 27.1 ms, cycle 0.499 -> 0.403 s;
-// 16 and 64 alike (docs/dev/decisions/0008-prefetching.md).
+// 16 and 64 alike (docs/dev/decisions/0015-locality-order.md).
 constexpr Index kPrefetchValueRows = 16;
 
 // The cache lines of the values of row i + ahead (if there is one); V: the stored value type

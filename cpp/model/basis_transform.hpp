@@ -3,7 +3,7 @@
 // T is block-diagonal with the nodal contact frames on the contact nodes and the identity
 // elsewhere; the dual mortar basis of two-body contact will be a sparse T of the same role.
 #pragma once
-#include "block_matrix.hpp"
+#include "base/block_matrix.hpp"
 #include "mg/prolongation.hpp"
 
 namespace cmg {

@@ -6,8 +6,7 @@
 #include <memory>
 #include "laws/law.hpp"
 #include "steps/fixed_point_step.hpp"
-#include <memory>
-#include "renumbering.hpp"
+#include "mg/renumbering.hpp"
 #include "steps/tnnmg_step.hpp"
 
 namespace cmg {
@@ -22,7 +21,7 @@ class ContactSolver {
   };
 
   // options: the solver's own options, the ones a solve starts from. Their ordering also decides
-  // the storage: coloured stores every level but the coarsest by colours (renumbering.hpp); what
+  // the storage: coloured stores every level but the coarsest by colours (mg/renumbering.hpp); what
   // goes in and out stays in the caller's numbering.
   ContactSolver(BlockMatrix<d> A, const double* f, const std::uint8_t* fixed, const double* fixed_values,
                 const std::vector<Index>& contact_nodes, const double* normals, const double* gaps, const double* coefficients,
@@ -243,14 +242,14 @@ class ContactSolver {
         P.push_back(make_prolongation<d>(T[l].n_fine, T[l].n_coarse, T[l].ptr.data(), T[l].parent.data(), T[l].weight.data()));
         // the interpolation weights are in P now: freed at once, not at the end of the build (their
         // 64-bit copies were 24 bytes a dof at level 9 in 2D during the renumbering and the
-        // Galerkin products, the peak of the build; issue 15)
+        // Galerkin products, the peak of the build; docs/dev/decisions/0011-memory-release.md)
         std::vector<Index>().swap(T[l].ptr);
         std::vector<Index>().swap(T[l].parent);
         std::vector<double>().swap(T[l].weight);
       }
       order.resize(P.size() + 1);
       if (renumber) {
-        // each colour stored in the level's locality order (renumbering.hpp); rank: the locality
+        // each colour stored in the level's locality order (mg/renumbering.hpp); rank: the locality
         // position of each stored row of the level just renumbered
         std::vector<Index> locality = reverse_cuthill_mckee<d>(A), rank;
         order.back() = Renumbering::by_colours<d>(A, locality);
@@ -383,7 +382,7 @@ class ContactSolver {
     R.rebuild_seconds = H_.rebuild_seconds() - rebuild_seconds0_;
     R.phase_seconds = mon_.phase_seconds();
     // u in the user's numbering, written once (no second copy to permute in place: the end of a
-    // solve was the peak of a level-9 run, issue 15)
+    // solve was the peak of a level-9 run, docs/dev/decisions/0011-memory-release.md)
     R.u = order_.back().to_storage_inverse(it_.u.data(), num_nodes(), d);
     R.contact_force.assign(nc * d, 0.0);
     R.friction_bound.assign(nc, 0.0);

@@ -1,18 +1,19 @@
-// The memory bandwidth the sweeps are measured against (issue 15), on the threads of the caller's
-// ThreadScope, with the same static schedule as the core's loops (each thread touches its own pages
-// first), on arrays far larger than the caches, compiled as the core is (its flags, no -march):
+// The memory bandwidth the sweeps are measured against (docs/dev/decisions/0015-locality-order.md), on
+// the threads of the caller's ThreadScope, with the same static schedule as the core's loops (each
+// thread touches its own pages first), on arrays far larger than the caches, compiled as the core is
+// (its flags, no -march):
 // - a STREAM-like triad a = b + s c (the reference of the issue);
 // - reads: a sum over one array read as `streams` parts at once. A cycle mostly reads -- matrix
 //   values and columns, x, b, the inverted diagonals -- from several streams at a time, and on this
 //   project's VM one core's read rate depends on how many: 10.9 GB/s from one stream, 15.0 from four
-//   (stop 24, docs/history/threads.md);
+//   (docs/dev/decisions/0012-thread-reproducibility.md);
 // - a matrix-like read: d x d blocks of doubles with int32 columns, row by row through the row
 //   passes' kernel (accumulate_blocks, with their value prefetch), x small enough for the caches:
 //   the matrix bytes of a product at their best.
 #pragma once
 #include <chrono>
-#include "block_matrix.hpp"
-#include "parallel.hpp"
+#include "base/block_matrix.hpp"
+#include "base/parallel.hpp"
 
 namespace cmg {
 

@@ -5,8 +5,8 @@
 // load and the Dirichlet values of a load step (set_load, set_fixed_values: the right-hand side
 // alone, the matrix and the fixed components stay).
 #pragma once
-#include "basis_transform.hpp"
-#include "contact_frames.hpp"
+#include "model/basis_transform.hpp"
+#include "model/contact_frames.hpp"
 #include "laws/contact_node.hpp"
 #include "mg/level_smoothers.hpp"
 
@@ -104,11 +104,11 @@ class ContactProblem {
   Index num_contact() const { return (Index)node_.size(); }
   const BlockMatrix<d>& matrix() const { return A_; }
   const std::vector<double>& load() const { return f_; }
-  // The inverse of the diagonal block of row i (invert_diagonal's): formed from the block itself
-  // in the sweep -- the same bits as a stored one, and 16 bytes a dof less to hold and to stream
-  // (issue 15) -- except on the rows where it is not the plain inverse (inert components,
-  // pseudo-inverses), kept here.
-  // (the lookup of a special row out of line, so that the common case inlines into the sweep)
+  // The inverse of the diagonal block of row i (invert_diagonal's): formed from the block itself in the
+  // sweep -- the same bits as a stored one, and 16 bytes a dof less to hold and to stream
+  // (docs/dev/decisions/0011-memory-release.md) -- except on the rows where it is not the plain inverse
+  // (inert components, pseudo-inverses), kept here. (the lookup of a special row out of line, so that
+  // the common case inlines into the sweep)
   Mat<d> diagonal_inverse(Index i) const {
     if (!(row_flags_[i] & kSpecialInverse)) return Mat<d>(A_.block(A_.diag[i])).inverse();
     return special_inverse(i);
@@ -131,7 +131,7 @@ class ContactProblem {
   ContactNode node(Index c) const {
     return {gap_[c], coef_[c], bound_[c], free_[c], origin_.empty() ? nullptr : origin_.data() + c * d};
   }
-  // The previous step of a load path (DESIGN section 12): friction acts on u_T - u_prev_T from now
+  // The previous step of a load path: friction acts on u_T - u_prev_T from now
   // on. u_prev is canonical (n * d); nullptr clears it (the path's first step from u = 0).
   void set_slip_origin(const double* u_prev) {
     if (!u_prev) { origin_.clear(); return; }

@@ -1,25 +1,26 @@
 // The storage order of the nodes of one level: a permutation applied once at setup (matrix, vectors,
-// prolongations), undone on the way out, so that the user's numbering is all the caller sees.
-// By colours (issue 15): the rows of one colour of the greedy colouring (sweep_order.hpp) become
-// one contiguous range, in the level's locality order within a colour (below), so a coloured sweep
-// streams the matrix and the iterate like a lexicographic one instead of gathering the rows of a
-// colour from all over memory, and the neighbours it gathers are near in every colour's range.
-// The colouring of the renumbered level is the colouring of the original one (greedy in
+// prolongations), undone on the way out, so that the user's numbering is all the caller sees. By colours
+// (docs/dev/decisions/0003-coloured-gauss-seidel.md): the rows of one colour of the greedy colouring
+// (sweep_order.hpp) become one contiguous range, in the level's locality order within a colour (below),
+// so a coloured sweep streams the matrix and the iterate like a lexicographic one instead of gathering
+// the rows of a colour from all over memory, and the neighbours it gathers are near in every colour's
+// range. The colouring of the renumbered level is the colouring of the original one (greedy in
 // colour-major order gives every row its colour again), so the method is unchanged; only round-off
 // differs (sums run in another column order).
 #pragma once
-#include "block_matrix.hpp"
+#include "base/block_matrix.hpp"
 #include "mg/sweep_order.hpp"
 
 namespace cmg {
 
-// The locality order of a level (issue 15). The user's numbering of a refined mesh is not local:
-// every refinement appends its new nodes, so a row's neighbours lay all over the vector (19 MB at
-// level 9 in 2D against 2 MB of L2) and every gather of a sweep, product or transfer missed the
-// cache. Reverse Cuthill-McKee is a wavefront through the mesh: a row's neighbours lie within about
-// one wavefront (~sqrt(n) nodes) of it, and so, within each colour's range sorted in that order, at
-// about the same relative position as the row in its own range. It needs only the block graph (the core has no coordinates). Each component starts at a
-// pseudo-peripheral node (George-Liu), so two bodies get a wavefront each.
+// The locality order of a level (docs/dev/decisions/0015-locality-order.md). The user's numbering of a
+// refined mesh is not local: every refinement appends its new nodes, so a row's neighbours lay all over
+// the vector (19 MB at level 9 in 2D against 2 MB of L2) and every gather of a sweep, product or
+// transfer missed the cache. Reverse Cuthill-McKee is a wavefront through the mesh: a row's neighbours
+// lie within about one wavefront (~sqrt(n) nodes) of it, and so, within each colour's range sorted in
+// that order, at about the same relative position as the row in its own range. It needs only the block
+// graph (the core has no coordinates). Each component starts at a pseudo-peripheral node (George-Liu),
+// so two bodies get a wavefront each.
 template <int d>
 std::vector<Index> reverse_cuthill_mckee(const BlockMatrix<d>& A) {
   const Index n = A.rows;
