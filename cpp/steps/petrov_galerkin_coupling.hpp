@@ -1,7 +1,7 @@
 // The Petrov-Galerkin coupling of the sliding nodes on the top coarse level, in every cycle of Algorithm
 // 2 but the first (docs/dev/decisions/0006-petrov-galerkin-coupling.md; SolverOptions::petrov_galerkin,
-// off in the core; the Python problem turns it on for Coulomb friction on 2D adaptive hierarchies). An
-// earlier version waited for a settled contact state (the truncation of the cycle before): that left the
+// off in the core; the Python problem turns it on for Coulomb friction on 2D adaptive hierarchies). Waiting
+// for a settled contact state (the truncation of the cycle before) instead leaves the
 // settling cycles at the frozen bound's slow rate (adaptive level 11, F = 2: 16 cycles against 13 in
 // every cycle).
 //

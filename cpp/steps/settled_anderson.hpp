@@ -61,8 +61,8 @@ class SettledAnderson {
   // the slot of the oldest pair, which the next step would drop (the textbook layout held the history,
   // x', g', g and a candidate: 10 fine vectors, 80 bytes a dof in 2D). Passes: one forms the new pair
   // with every dot product of the least-squares problem (the Gram entries of older pairs are kept: the
-  // pairs do not change), one forms the candidate in gx and keeps G(x) as the next last iterate (were
-  // some 40 vector reads and writes a step, now 19). Every value is the one of the textbook layout bit
+  // pairs do not change), one forms the candidate in gx and keeps G(x) as the next last iterate (19
+  // vector reads and writes a step against some 40 in the textbook layout). Every value is the one of the textbook layout bit
   // for bit: g' = G(x') - x' is formed again from the same operands, and the sums run over the same
   // chunks in the same order (parallel_sums).
   template <class Admit>
