@@ -12,6 +12,7 @@
 #include "steps/tied_correction.hpp"
 #include "steps/settled_anderson.hpp"
 #include "steps/petrov_galerkin_coupling.hpp"
+#include "steps/projected_correction.hpp"
 #include "steps/upwind_contact_sweep.hpp"
 
 namespace cmg {
@@ -68,7 +69,7 @@ class MonotoneMultigridStep {
       : P_(P), H_(H), C_(C), built_(built), it_(it), opt_(opt), order_(fine_order), tied_(tied), ws_(work ? *work : own_),
         r_(ws_.r), old_(ws_.old), anderson_(ws_.anderson), pg_(H, opt.petrov_galerkin && L::coarse_freezes_bound),
         upwind_(P, fine_order, opt.upwind_contact_sweep && L::coarse_freezes_bound),
-        projected_(opt.projected_coarse_correction && L::has_contact) {
+        projected_(P, opt.projected_coarse_correction && L::has_contact) {
     const Index n = P.num_nodes() * d;
     mask_ = P.base_mask();
     r_.assign(n, 0.0); old_.assign(n, 0.0);  // of the same size: no new pages
@@ -80,11 +81,6 @@ class MonotoneMultigridStep {
     if constexpr (L::coarse_freezes_bound)
       if (work) anderson_.reserve(n);
     lo_.assign(P.num_contact() * d, -kInf); hi_.assign(P.num_contact() * d, kInf);  // bounds live at contact nodes only
-    if (projected_) {
-      w_.assign(n, 0.0);
-      bound_.assign(P.num_contact(), 0.0);
-      hi_open_.assign(P.num_contact() * d, kInf);
-    }
   }
 
   double iterate(double* phases, bool& rebuilt) {
@@ -127,7 +123,7 @@ class MonotoneMultigridStep {
       return s;
     };
     // u += P~ c: prolongated straight into the iterate (no fine vector for the correction)
-    if (projected_ && bounded) projected_correction(fine_residual);
+    if (projected_.on() && bounded) projected_.apply(P_, C_, opt_, fine_residual, mask_.data(), lo_, hi_, u, r_.data());
     else
       C_.correction_of(opt_, fine_residual, mask_.data(), NodeBounds{&P_.contact_nodes(), lo_.data(), hi_.data()}, bounded, u.data(),
                        P_.num_nodes(), true);
@@ -213,7 +209,7 @@ class MonotoneMultigridStep {
       }
     rec.energy = e;
     rec.petrov_galerkin = pg_.state();
-    if (projected_) rec.step_size = step_size_;
+    if (projected_.on()) rec.step_size = projected_.step_size();
   }
 
   // ||u - u*||_A with u* canonical (taken to the contact frames first)
@@ -255,7 +251,7 @@ class MonotoneMultigridStep {
     for (Index c = 0; c < P_.num_contact(); ++c) {
       const Index i = P_.contact_node(c), k = i * d;
       Mat<d> Hc = Mat<d>::Zero();
-      if (projected_) bound_[c] = L::bound(P_.node(c), it_.u[k] >= P_.node(c).gap, r_[k]);  // r_ before the friction gradient
+      if (projected_.on()) projected_.set_bound(c, L::bound(P_.node(c), it_.u[k] >= P_.node(c).gap, r_[k]));  // r_ before the friction gradient
       if (linearize_node<L, d>(P_.node(c), it_.u.data() + k, r_.data() + k, mask_.data() + k, base.data() + k, lo_.data() + c * d,
                                hi_.data() + c * d, &Hc, P_.matrix().block(P_.matrix().diag[i])))
         bounded = true;
@@ -267,45 +263,6 @@ class MonotoneMultigridStep {
         }
     }
     return bounded;
-  }
-
-  // The coarse correction w with every bound but the inactive nodes' gap bounds (the sliding signs
-  // stay), projected node-wise onto u_n + w_n <= g, then u += a w with a the exact minimizer of the
-  // frozen-bound energy along w (frozen_line_search.hpp, TNNMG's): a descent step whatever w is, so
-  // the cycle stays monotone, and a node closing on the obstacle no longer throttles the coarse
-  // motions around it. The slope w^T (f - A u) is taken as w^T f - (A w)^T u (A symmetric): one
-  // product with A, into r_ (free after the restriction).
-  template <class Row>
-  void projected_correction(Row&& fine_residual) {
-    std::vector<double>& u = it_.u;
-    const BlockMatrix<d>& A = P_.matrix();
-    const std::vector<double>& f = P_.load();
-    bool bounded = false;
-    for (std::size_t k = 0; k < hi_.size(); ++k) {
-      hi_open_[k] = k % d == 0 ? kInf : hi_[k];
-      bounded = bounded || hi_open_[k] < kInf || lo_[k] > -kInf;
-    }
-    C_.correction_of(opt_, fine_residual, mask_.data(), NodeBounds{&P_.contact_nodes(), lo_.data(), hi_open_.data()}, bounded,
-                     w_.data(), P_.num_nodes(), false);
-    for (Index c = 0; c < P_.num_contact(); ++c) {
-      const Index k = P_.contact_node(c) * d;
-      const double room = P_.node(c).gap - u[k];
-      if (w_[k] > room) w_[k] = std::max(0.0, room);
-    }
-    A.multiply(w_.data(), r_.data());
-    const Index n = (Index)u.size();
-    const double quad = parallel_sum(n, [&](Index k) { return w_[k] * r_[k]; });
-    const double slope = parallel_sum(n, [&](Index k) { return w_[k] * f[k] - r_[k] * u[k]; });
-    search_.clear(quad, slope);
-    for (Index c = 0; c < P_.num_contact(); ++c) {
-      const Index k = P_.contact_node(c) * d;
-      const ContactNode p = P_.node(c);
-      const Vec<d> v = slip_increment<d>(p, u.data() + k);  // a load step's friction acts on the increment
-      search_.add_friction(bound_[c], v.data(), w_.data() + k, p.free);
-      search_.add_normal_limit(p.gap - u[k], w_[k]);
-    }
-    const double a = step_size_ = search_.minimize();
-    parallel_for(n, [&](Index k) { u[k] += a * w_[k]; });
   }
 
   // |y - x|_A^2 with A (y - x) into z (one product with A; taken only where the truncation
@@ -376,12 +333,8 @@ class MonotoneMultigridStep {
   UpwindContactSweep<d, L> upwind_;
   std::vector<std::pair<Index, Vec<d>>> coupling_;  // sliding node -> w (bound_coupling), when wanted
   bool first_ = true;
-  // the projected coarse correction (SolverOptions::projected_coarse_correction): its direction, the
-  // frozen bounds, the upper bounds without the gaps, the line search and its last step
-  const bool projected_;
-  std::vector<double> w_, bound_, hi_open_;
-  FrozenLineSearch<d> search_;
-  double step_size_ = std::numeric_limits<double>::quiet_NaN();
+  // in place of the plain truncated coarse correction where it is on (projected_correction.hpp)
+  ProjectedCoarseCorrection<d> projected_;
   double best_step_ = kInf;  // the smallest |u^{k+1} - u^k|_A of this solve
 };
 
