@@ -83,57 +83,27 @@ class MonotoneMultigridStep {
     lo_.assign(P.num_contact() * d, -kInf); hi_.assign(P.num_contact() * d, kInf);  // bounds live at contact nodes only
   }
 
+  // One cycle: smooth, linearize, bring the coarse levels to the linearization, coarse correction,
+  // smooth back; then the settled mixing and the step |u^{k+1} - u^k|_A.
   double iterate(double* phases, bool& rebuilt) {
     PhaseClock pc(phases);
     std::vector<double>& u = it_.u;
     const BlockMatrix<d>& A = P_.matrix();
-    const std::vector<double>& f = P_.load();
     // on all threads: a plain vector copy was a serial pass over two fine vectors
     // (docs/dev/decisions/0003-coloured-gauss-seidel.md)
     parallel_for((Index)u.size(), [&](Index k) { old_[k] = u[k]; });
-    for (int s = 0; s < opt_.nu1; ++s) {
-      Smoother::sweep(P_, u.data(), true, order_);
-      if (upwind_.on()) upwind_.visit(P_, u.data());
-    }
+    smooth(opt_.nu1, true);
     pc.lap(Phase::PreSmooth);
-    // The fine residual r = f - A u: at the contact rows now (the linearization reads them and adds the
-    // friction gradient), every other row where the coarse correction restricts it, formed as it is
-    // restricted (BlockMatrix::residual_row): a residual pass wrote a fine vector that the restriction
-    // read straight back (docs/dev/decisions/0013-fused-residual.md). The same sums: the same bits as a
-    // residual pass.
-    constexpr Index ahead = kPrefetchValueRows;
-    for (Index c = 0; c < P_.num_contact(); ++c)
-      A.residual_row(A.values.data(), u.data(), f.data(), P_.contact_node(c), ahead, r_.data() + d * P_.contact_node(c));
-    const bool bounded = linearize();
-    upwind_.order_from(P_, coupling_);
+    const bool bounded = linearize_at_iterate();
     pc.lap(Phase::Linearize);
     const bool state_changed = mask_ != built_.mask;
-    rebuilt = built_.update(H_, A, mask_, hessian_);
-    // every cycle but the first, for the sliding nodes of this one: waiting until the truncation settles
-    // left the settling cycles at the frozen bound's slow rate (adaptive Hertz level 11, F = 2: 16
-    // cycles settled only, 13 in every cycle; docs/dev/decisions/0006-petrov-galerkin-coupling.md)
-    pg_.bring(A, mask_.data(), coupling_, !first_);
-    first_ = false;
+    rebuilt = update_coarse();
     pc.lap(Phase::CoarseUpdate);
-    const std::uint8_t* flags = P_.row_flags();
-    const auto fine_residual = [&](Index i) {
-      Vec<d> s;
-      if (flags[i] & ContactProblem<d>::kContactRow) s = CVecMap<d>(r_.data() + d * i);
-      else A.residual_row(A.values.data(), u.data(), f.data(), i, ahead, s.data());
-      return s;
-    };
-    // u += P~ c: prolongated straight into the iterate (no fine vector for the correction)
-    if (projected_.on() && bounded) projected_.apply(P_, C_, opt_, fine_residual, mask_.data(), lo_, hi_, u, r_.data());
-    else
-      C_.correction_of(opt_, fine_residual, mask_.data(), NodeBounds{&P_.contact_nodes(), lo_.data(), hi_.data()}, bounded, u.data(),
-                       P_.num_nodes(), true);
-    if (tied_) tied_->apply(P_, opt_, u.data());  // two bodies: the common motions, no bounds
+    coarse_correction(bounded);
     pc.lap(Phase::CoarseCorrection);
-    for (int s = 0; s < opt_.nu2; ++s) {
-      Smoother::sweep(P_, u.data(), false, order_, opt_.omega_post);
-      if (upwind_.on()) upwind_.visit(P_, u.data());
-    }
+    smooth(opt_.nu2, false);
     pc.lap(Phase::PostSmooth);
+    constexpr Index ahead = kPrefetchValueRows;
     double measured = -1;  // the step, when the restart test has measured it already
     if constexpr (L::coarse_freezes_bound) {
       // old_ = x (before the cycle), u = G(x): mix the cycles (settled_anderson.hpp).
@@ -241,6 +211,71 @@ class MonotoneMultigridStep {
   }
 
  private:
+  // nonlinear Gauss-Seidel sweeps of the law, forward (pre-smoothing) or backward with omega_post,
+  // each followed by the upwind visit of the contact nodes where that is on
+  void smooth(int sweeps, bool forward) {
+    std::vector<double>& u = it_.u;
+    for (int s = 0; s < sweeps; ++s) {
+      if (forward) Smoother::sweep(P_, u.data(), true, order_);
+      else Smoother::sweep(P_, u.data(), false, order_, opt_.omega_post);
+      if (upwind_.on()) upwind_.visit(P_, u.data());
+    }
+  }
+
+  // The residual at the contact rows and the law's linearization there; returns whether any bound
+  // is finite.
+  bool linearize_at_iterate() {
+    std::vector<double>& u = it_.u;
+    const BlockMatrix<d>& A = P_.matrix();
+    const std::vector<double>& f = P_.load();
+    // The fine residual r = f - A u: at the contact rows now (the linearization reads them and adds the
+    // friction gradient), every other row where the coarse correction restricts it, formed as it is
+    // restricted (BlockMatrix::residual_row): a residual pass wrote a fine vector that the restriction
+    // read straight back (docs/dev/decisions/0013-fused-residual.md). The same sums: the same bits as a
+    // residual pass.
+    constexpr Index ahead = kPrefetchValueRows;
+    for (Index c = 0; c < P_.num_contact(); ++c)
+      A.residual_row(A.values.data(), u.data(), f.data(), P_.contact_node(c), ahead, r_.data() + d * P_.contact_node(c));
+    const bool bounded = linearize();
+    upwind_.order_from(P_, coupling_);
+    return bounded;
+  }
+
+  // The coarse levels brought to this linearization (returns whether they changed), the
+  // Petrov-Galerkin coupling overlaid where it is on.
+  bool update_coarse() {
+    const BlockMatrix<d>& A = P_.matrix();
+    const bool rebuilt = built_.update(H_, A, mask_, hessian_);
+    // every cycle but the first, for the sliding nodes of this one: waiting until the truncation settles
+    // left the settling cycles at the frozen bound's slow rate (adaptive Hertz level 11, F = 2: 16
+    // cycles settled only, 13 in every cycle; docs/dev/decisions/0006-petrov-galerkin-coupling.md)
+    pg_.bring(A, mask_.data(), coupling_, !first_);
+    first_ = false;
+    return rebuilt;
+  }
+
+  // The coarse correction chosen at setup: the projected one where it is on and a bound is finite,
+  // else the truncated monotone one; then the tied correction of two bodies where the solver has one.
+  void coarse_correction(bool bounded) {
+    std::vector<double>& u = it_.u;
+    const BlockMatrix<d>& A = P_.matrix();
+    const std::vector<double>& f = P_.load();
+    constexpr Index ahead = kPrefetchValueRows;
+    const std::uint8_t* flags = P_.row_flags();
+    const auto fine_residual = [&](Index i) {
+      Vec<d> s;
+      if (flags[i] & ContactProblem<d>::kContactRow) s = CVecMap<d>(r_.data() + d * i);
+      else A.residual_row(A.values.data(), u.data(), f.data(), i, ahead, s.data());
+      return s;
+    };
+    // u += P~ c: prolongated straight into the iterate (no fine vector for the correction)
+    if (projected_.on() && bounded) projected_.apply(P_, C_, opt_, fine_residual, mask_.data(), lo_, hi_, u, r_.data());
+    else
+      C_.correction_of(opt_, fine_residual, mask_.data(), NodeBounds{&P_.contact_nodes(), lo_.data(), hi_.data()}, bounded, u.data(),
+                       P_.num_nodes(), true);
+    if (tied_) tied_->apply(P_, opt_, u.data());  // two bodies: the common motions, no bounds
+  }
+
   // The law's linearization at every contact node; returns whether any bound is finite.
   bool linearize() {
     hessian_.clear();
