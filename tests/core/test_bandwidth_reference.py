@@ -1,4 +1,4 @@
-"""Bandwidth references (cpp/bandwidth.hpp) and the cycle's byte model
+"""Bandwidth references (cpp/base/bandwidth.hpp) and the cycle's byte model
 (benchmarks/performance/threads.py). Not timed: the rates are only checked to be rates, the model's
 visit counts against the coarse cycle's definition (mg/cycle.hpp)."""
 import math

@@ -1,4 +1,4 @@
-"""Every colour of a level stored by colours in the level's locality order (renumbering.hpp). What
+"""Every colour of a level stored by colours in the level's locality order (cpp/mg/renumbering.hpp). What
 goes in and out stays in the user's numbering, the result does not depend on the thread count, and
 the coloured method converges as it does on the levels stored in the user's numbering."""
 import numpy as np

@@ -1,5 +1,5 @@
 """The nodal contact frames Q_p = [n, t(, s)] (columns): the Python face of the core's one
-construction (cpp/contact_frames.hpp). In 2D t is n turned by +90 degrees; in 3D t lies along a
+construction (cpp/model/contact_frames.hpp). In 2D t is n turned by +90 degrees; in 3D t lies along a
 Dirichlet-fixed axis orthogonal to n where there is one, else it is built from the canonical axis
 least aligned with n, and s = n x t. The problem's ContactBoundary.frames and every result's
 contact_frames are these; checks and outputs use them from there.
@@ -15,7 +15,7 @@ from .. import _core
 
 def contact_frames(normals: np.ndarray, fixed: Optional[np.ndarray] = None) -> np.ndarray:
     """Frames (nc, d, d) with columns n, t(, s) for the (non-zero) normals (nc, d), as the core
-    builds them (one construction, cpp/contact_frames.hpp): `fixed` (nc, d), the canonical
+    builds them (one construction, cpp/model/contact_frames.hpp): `fixed` (nc, d), the canonical
     components fixed by Dirichlet data, makes a fixed axis orthogonal to n a frame tangent in 3D."""
     normals = np.ascontiguousarray(normals, dtype=float)
     if normals.ndim != 2 or normals.shape[1] not in (2, 3):
