@@ -12,7 +12,6 @@
 #include "steps/tied_correction.hpp"
 #include "steps/settled_anderson.hpp"
 #include "steps/petrov_galerkin_coupling.hpp"
-#include "steps/projected_correction.hpp"
 #include "steps/upwind_contact_sweep.hpp"
 
 namespace cmg {
@@ -69,7 +68,7 @@ class MonotoneMultigridStep {
       : P_(P), H_(H), C_(C), built_(built), it_(it), opt_(opt), order_(fine_order), tied_(tied), ws_(work ? *work : own_),
         r_(ws_.r), old_(ws_.old), anderson_(ws_.anderson), pg_(H, opt.petrov_galerkin && L::coarse_freezes_bound),
         upwind_(P, fine_order, opt.upwind_contact_sweep && L::coarse_freezes_bound),
-        projected_(P, opt.projected_coarse_correction && L::has_contact) {
+        projected_(opt.projected_coarse_correction && L::has_contact) {
     const Index n = P.num_nodes() * d;
     mask_ = P.base_mask();
     r_.assign(n, 0.0); old_.assign(n, 0.0);  // of the same size: no new pages
@@ -81,29 +80,64 @@ class MonotoneMultigridStep {
     if constexpr (L::coarse_freezes_bound)
       if (work) anderson_.reserve(n);
     lo_.assign(P.num_contact() * d, -kInf); hi_.assign(P.num_contact() * d, kInf);  // bounds live at contact nodes only
+    if (projected_) {
+      w_.assign(n, 0.0);
+      bound_.assign(P.num_contact(), 0.0);
+      hi_open_.assign(P.num_contact() * d, kInf);
+    }
   }
 
-  // One cycle: smooth, linearize, bring the coarse levels to the linearization, coarse correction,
-  // smooth back; then the settled mixing and the step |u^{k+1} - u^k|_A.
   double iterate(double* phases, bool& rebuilt) {
     PhaseClock pc(phases);
     std::vector<double>& u = it_.u;
     const BlockMatrix<d>& A = P_.matrix();
+    const std::vector<double>& f = P_.load();
     // on all threads: a plain vector copy was a serial pass over two fine vectors
     // (docs/dev/decisions/0003-coloured-gauss-seidel.md)
     parallel_for((Index)u.size(), [&](Index k) { old_[k] = u[k]; });
-    smooth(opt_.nu1, true);
+    for (int s = 0; s < opt_.nu1; ++s) {
+      Smoother::sweep(P_, u.data(), true, order_);
+      if (upwind_.on()) upwind_.visit(P_, u.data());
+    }
     pc.lap(Phase::PreSmooth);
-    const bool bounded = linearize_at_iterate();
+    // The fine residual r = f - A u: at the contact rows now (the linearization reads them and adds the
+    // friction gradient), every other row where the coarse correction restricts it, formed as it is
+    // restricted (BlockMatrix::residual_row): a residual pass wrote a fine vector that the restriction
+    // read straight back (docs/dev/decisions/0013-fused-residual.md). The same sums: the same bits as a
+    // residual pass.
+    constexpr Index ahead = kPrefetchValueRows;
+    for (Index c = 0; c < P_.num_contact(); ++c)
+      A.residual_row(A.values.data(), u.data(), f.data(), P_.contact_node(c), ahead, r_.data() + d * P_.contact_node(c));
+    const bool bounded = linearize();
+    upwind_.order_from(P_, coupling_);
     pc.lap(Phase::Linearize);
     const bool state_changed = mask_ != built_.mask;
-    rebuilt = update_coarse();
+    rebuilt = built_.update(H_, A, mask_, hessian_);
+    // every cycle but the first, for the sliding nodes of this one: waiting until the truncation settles
+    // left the settling cycles at the frozen bound's slow rate (adaptive Hertz level 11, F = 2: 16
+    // cycles settled only, 13 in every cycle; docs/dev/decisions/0006-petrov-galerkin-coupling.md)
+    pg_.bring(A, mask_.data(), coupling_, !first_);
+    first_ = false;
     pc.lap(Phase::CoarseUpdate);
-    coarse_correction(bounded);
+    const std::uint8_t* flags = P_.row_flags();
+    const auto fine_residual = [&](Index i) {
+      Vec<d> s;
+      if (flags[i] & ContactProblem<d>::kContactRow) s = CVecMap<d>(r_.data() + d * i);
+      else A.residual_row(A.values.data(), u.data(), f.data(), i, ahead, s.data());
+      return s;
+    };
+    // u += P~ c: prolongated straight into the iterate (no fine vector for the correction)
+    if (projected_ && bounded) projected_correction(fine_residual);
+    else
+      C_.correction_of(opt_, fine_residual, mask_.data(), NodeBounds{&P_.contact_nodes(), lo_.data(), hi_.data()}, bounded, u.data(),
+                       P_.num_nodes(), true);
+    if (tied_) tied_->apply(P_, opt_, u.data());  // two bodies: the common motions, no bounds
     pc.lap(Phase::CoarseCorrection);
-    smooth(opt_.nu2, false);
+    for (int s = 0; s < opt_.nu2; ++s) {
+      Smoother::sweep(P_, u.data(), false, order_, opt_.omega_post);
+      if (upwind_.on()) upwind_.visit(P_, u.data());
+    }
     pc.lap(Phase::PostSmooth);
-    constexpr Index ahead = kPrefetchValueRows;
     double measured = -1;  // the step, when the restart test has measured it already
     if constexpr (L::coarse_freezes_bound) {
       // old_ = x (before the cycle), u = G(x): mix the cycles (settled_anderson.hpp).
@@ -179,7 +213,7 @@ class MonotoneMultigridStep {
       }
     rec.energy = e;
     rec.petrov_galerkin = pg_.state();
-    if (projected_.on()) rec.step_size = projected_.step_size();
+    if (projected_) rec.step_size = step_size_;
   }
 
   // ||u - u*||_A with u* canonical (taken to the contact frames first)
@@ -211,71 +245,6 @@ class MonotoneMultigridStep {
   }
 
  private:
-  // nonlinear Gauss-Seidel sweeps of the law, forward (pre-smoothing) or backward with omega_post,
-  // each followed by the upwind visit of the contact nodes where that is on
-  void smooth(int sweeps, bool forward) {
-    std::vector<double>& u = it_.u;
-    for (int s = 0; s < sweeps; ++s) {
-      if (forward) Smoother::sweep(P_, u.data(), true, order_);
-      else Smoother::sweep(P_, u.data(), false, order_, opt_.omega_post);
-      if (upwind_.on()) upwind_.visit(P_, u.data());
-    }
-  }
-
-  // The residual at the contact rows and the law's linearization there; returns whether any bound
-  // is finite.
-  bool linearize_at_iterate() {
-    std::vector<double>& u = it_.u;
-    const BlockMatrix<d>& A = P_.matrix();
-    const std::vector<double>& f = P_.load();
-    // The fine residual r = f - A u: at the contact rows now (the linearization reads them and adds the
-    // friction gradient), every other row where the coarse correction restricts it, formed as it is
-    // restricted (BlockMatrix::residual_row): a residual pass wrote a fine vector that the restriction
-    // read straight back (docs/dev/decisions/0013-fused-residual.md). The same sums: the same bits as a
-    // residual pass.
-    constexpr Index ahead = kPrefetchValueRows;
-    for (Index c = 0; c < P_.num_contact(); ++c)
-      A.residual_row(A.values.data(), u.data(), f.data(), P_.contact_node(c), ahead, r_.data() + d * P_.contact_node(c));
-    const bool bounded = linearize();
-    upwind_.order_from(P_, coupling_);
-    return bounded;
-  }
-
-  // The coarse levels brought to this linearization (returns whether they changed), the
-  // Petrov-Galerkin coupling overlaid where it is on.
-  bool update_coarse() {
-    const BlockMatrix<d>& A = P_.matrix();
-    const bool rebuilt = built_.update(H_, A, mask_, hessian_);
-    // every cycle but the first, for the sliding nodes of this one: waiting until the truncation settles
-    // left the settling cycles at the frozen bound's slow rate (adaptive Hertz level 11, F = 2: 16
-    // cycles settled only, 13 in every cycle; docs/dev/decisions/0006-petrov-galerkin-coupling.md)
-    pg_.bring(A, mask_.data(), coupling_, !first_);
-    first_ = false;
-    return rebuilt;
-  }
-
-  // The coarse correction chosen at setup: the projected one where it is on and a bound is finite,
-  // else the truncated monotone one; then the tied correction of two bodies where the solver has one.
-  void coarse_correction(bool bounded) {
-    std::vector<double>& u = it_.u;
-    const BlockMatrix<d>& A = P_.matrix();
-    const std::vector<double>& f = P_.load();
-    constexpr Index ahead = kPrefetchValueRows;
-    const std::uint8_t* flags = P_.row_flags();
-    const auto fine_residual = [&](Index i) {
-      Vec<d> s;
-      if (flags[i] & ContactProblem<d>::kContactRow) s = CVecMap<d>(r_.data() + d * i);
-      else A.residual_row(A.values.data(), u.data(), f.data(), i, ahead, s.data());
-      return s;
-    };
-    // u += P~ c: prolongated straight into the iterate (no fine vector for the correction)
-    if (projected_.on() && bounded) projected_.apply(P_, C_, opt_, fine_residual, mask_.data(), lo_, hi_, u, r_.data());
-    else
-      C_.correction_of(opt_, fine_residual, mask_.data(), NodeBounds{&P_.contact_nodes(), lo_.data(), hi_.data()}, bounded, u.data(),
-                       P_.num_nodes(), true);
-    if (tied_) tied_->apply(P_, opt_, u.data());  // two bodies: the common motions, no bounds
-  }
-
   // The law's linearization at every contact node; returns whether any bound is finite.
   bool linearize() {
     hessian_.clear();
@@ -286,7 +255,7 @@ class MonotoneMultigridStep {
     for (Index c = 0; c < P_.num_contact(); ++c) {
       const Index i = P_.contact_node(c), k = i * d;
       Mat<d> Hc = Mat<d>::Zero();
-      if (projected_.on()) projected_.set_bound(c, L::bound(P_.node(c), it_.u[k] >= P_.node(c).gap, r_[k]));  // r_ before the friction gradient
+      if (projected_) bound_[c] = L::bound(P_.node(c), it_.u[k] >= P_.node(c).gap, r_[k]);  // r_ before the friction gradient
       if (linearize_node<L, d>(P_.node(c), it_.u.data() + k, r_.data() + k, mask_.data() + k, base.data() + k, lo_.data() + c * d,
                                hi_.data() + c * d, &Hc, P_.matrix().block(P_.matrix().diag[i])))
         bounded = true;
@@ -298,6 +267,45 @@ class MonotoneMultigridStep {
         }
     }
     return bounded;
+  }
+
+  // The coarse correction w with every bound but the inactive nodes' gap bounds (the sliding signs
+  // stay), projected node-wise onto u_n + w_n <= g, then u += a w with a the exact minimizer of the
+  // frozen-bound energy along w (frozen_line_search.hpp, TNNMG's): a descent step whatever w is, so
+  // the cycle stays monotone, and a node closing on the obstacle no longer throttles the coarse
+  // motions around it. The slope w^T (f - A u) is taken as w^T f - (A w)^T u (A symmetric): one
+  // product with A, into r_ (free after the restriction).
+  template <class Row>
+  void projected_correction(Row&& fine_residual) {
+    std::vector<double>& u = it_.u;
+    const BlockMatrix<d>& A = P_.matrix();
+    const std::vector<double>& f = P_.load();
+    bool bounded = false;
+    for (std::size_t k = 0; k < hi_.size(); ++k) {
+      hi_open_[k] = k % d == 0 ? kInf : hi_[k];
+      bounded = bounded || hi_open_[k] < kInf || lo_[k] > -kInf;
+    }
+    C_.correction_of(opt_, fine_residual, mask_.data(), NodeBounds{&P_.contact_nodes(), lo_.data(), hi_open_.data()}, bounded,
+                     w_.data(), P_.num_nodes(), false);
+    for (Index c = 0; c < P_.num_contact(); ++c) {
+      const Index k = P_.contact_node(c) * d;
+      const double room = P_.node(c).gap - u[k];
+      if (w_[k] > room) w_[k] = std::max(0.0, room);
+    }
+    A.multiply(w_.data(), r_.data());
+    const Index n = (Index)u.size();
+    const double quad = parallel_sum(n, [&](Index k) { return w_[k] * r_[k]; });
+    const double slope = parallel_sum(n, [&](Index k) { return w_[k] * f[k] - r_[k] * u[k]; });
+    search_.clear(quad, slope);
+    for (Index c = 0; c < P_.num_contact(); ++c) {
+      const Index k = P_.contact_node(c) * d;
+      const ContactNode p = P_.node(c);
+      const Vec<d> v = slip_increment<d>(p, u.data() + k);  // a load step's friction acts on the increment
+      search_.add_friction(bound_[c], v.data(), w_.data() + k, p.free);
+      search_.add_normal_limit(p.gap - u[k], w_[k]);
+    }
+    const double a = step_size_ = search_.minimize();
+    parallel_for(n, [&](Index k) { u[k] += a * w_[k]; });
   }
 
   // |y - x|_A^2 with A (y - x) into z (one product with A; taken only where the truncation
@@ -368,8 +376,12 @@ class MonotoneMultigridStep {
   UpwindContactSweep<d, L> upwind_;
   std::vector<std::pair<Index, Vec<d>>> coupling_;  // sliding node -> w (bound_coupling), when wanted
   bool first_ = true;
-  // in place of the plain truncated coarse correction where it is on (projected_correction.hpp)
-  ProjectedCoarseCorrection<d> projected_;
+  // the projected coarse correction (SolverOptions::projected_coarse_correction): its direction, the
+  // frozen bounds, the upper bounds without the gaps, the line search and its last step
+  const bool projected_;
+  std::vector<double> w_, bound_, hi_open_;
+  FrozenLineSearch<d> search_;
+  double step_size_ = std::numeric_limits<double>::quiet_NaN();
   double best_step_ = kInf;  // the smallest |u^{k+1} - u^k|_A of this solve
 };
 
