@@ -95,6 +95,23 @@ def add_path_arguments(p) -> None:
                    help="load path: the stick and slip zones against the load step")
 
 
+def add_stop_options(p) -> None:
+    """Add --tol, --max-cycles and --cycle: when a solve stops and which multigrid cycle it runs."""
+    p.add_argument("--tol", type=_nonneg_float("--tol", positive=True), default=1e-11,
+                   help="stop when the correction's energy norm ||u^{k+1} - u^k||_A falls below this")
+    p.add_argument("--max-cycles", type=_positive_int("--max-cycles", 1, MAX_CYCLES), default=200,
+                   help="stop as not converged after this many cycles")
+    p.add_argument("--cycle", choices=["V", "W", "F"], default="F", help="multigrid cycle type")
+
+
+def add_report_options(p) -> None:
+    """Add --json and --vtu: the report as JSON and the solution for ParaView."""
+    p.add_argument("--json", type=_writable, metavar="PATH|-",
+                   help="write the report as JSON to PATH (-: standard output)")
+    p.add_argument("--vtu", type=_with_suffix("--vtu", (".vtu",)), metavar="PATH",
+                   help="write the mesh with displacement, stresses and contact states (ParaView)")
+
+
 def add_thread_options(p) -> None:
     """Add --threads and --ordering to a command's parser."""
     p.add_argument("--threads", type=_positive_int("--threads", 0, 4096), default=0,

@@ -6,7 +6,7 @@ import os
 import sys
 from typing import List, Optional
 
-from .common import (EXIT_BAD_INPUT, EXIT_NO_CONVERGENCE, EXIT_OK, MAX_CYCLES, MAX_LEVELS, PLOT_SUFFIXES, _Parser, _emit_json, _nonneg_float, _positive_int, _with_suffix, _writable, add_path_arguments, add_thread_options, hertz_report, release_after_build, use_ordering, write_boundary_stress_plot)
+from .common import (EXIT_BAD_INPUT, EXIT_NO_CONVERGENCE, EXIT_OK, MAX_LEVELS, PLOT_SUFFIXES, _Parser, _emit_json, _nonneg_float, _positive_int, _with_suffix, _writable, add_path_arguments, add_report_options, add_stop_options, add_thread_options, hertz_report, release_after_build, use_ordering, write_boundary_stress_plot)
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -22,11 +22,7 @@ def _parser() -> argparse.ArgumentParser:
     h.add_argument("--method", choices=["nmg", "fixed-point", "linear", "tnnmg"], default="nmg",
                    help="nmg: Algorithm 2 (nonlinear multigrid); fixed-point: Algorithm 1; linear: the cost "
                         "reference; tnnmg: truncated nonsmooth Newton multigrid")
-    h.add_argument("--tol", type=_nonneg_float("--tol", positive=True), default=1e-11,
-                   help="stop when the correction's energy norm ||u^{k+1} - u^k||_A falls below this")
-    h.add_argument("--max-cycles", type=_positive_int("--max-cycles", 1, MAX_CYCLES), default=200,
-                   help="stop as not converged after this many cycles")
-    h.add_argument("--cycle", choices=["V", "W", "F"], default="F", help="multigrid cycle type")
+    add_stop_options(h)
     h.add_argument("--nu1", type=_positive_int("--nu1", 0, 100), default=3, help="pre-smoothing steps per level")
     h.add_argument("--nu2", type=_positive_int("--nu2", 0, 100), default=3, help="post-smoothing steps per level")
     h.add_argument("--hierarchy", choices=["uniform", "adaptive"], default="uniform",
@@ -35,10 +31,7 @@ def _parser() -> argparse.ArgumentParser:
                    help="the linear correction of --method tnnmg (default pcg: conjugate gradients with the "
                         "line-smoothed truncated linear cycle; coarse: the coarse levels alone)")
     add_thread_options(h)
-    h.add_argument("--json", type=_writable, metavar="PATH|-",
-                   help="write the report as JSON to PATH (-: standard output)")
-    h.add_argument("--vtu", type=_with_suffix("--vtu", (".vtu",)), metavar="PATH",
-                   help="write the mesh with displacement, stresses and contact states (ParaView)")
+    add_report_options(h)
     h.add_argument("--plot", type=_with_suffix("--plot", PLOT_SUFFIXES), metavar="PATH",
                    help="write the boundary stresses with the stick and slip zones (.png, .pdf or .svg)")
     add_path_arguments(h)

@@ -18,18 +18,11 @@ def _common(p, levels_default):
     p.add_argument("--method", choices=["nmg", "fixed-point", "linear", "tnnmg"], default="nmg",
                    help="nmg: Algorithm 2 (nonlinear multigrid); fixed-point: Algorithm 1; linear: the cost "
                         "reference; tnnmg: truncated nonsmooth Newton multigrid")
-    p.add_argument("--tol", type=cli._nonneg_float("--tol", positive=True), default=1e-11,
-                   help="stop when the correction's energy norm ||u^{k+1} - u^k||_A falls below this")
-    p.add_argument("--max-cycles", type=cli._positive_int("--max-cycles"), default=200,
-                   help="stop as not converged after this many cycles")
-    p.add_argument("--cycle", choices=["V", "W", "F"], default="F", help="multigrid cycle type")
+    cli.add_stop_options(p)
     p.add_argument("--nu1", type=cli._positive_int("--nu1", 0, 100), default=3, help="pre-smoothing steps per level")
     p.add_argument("--nu2", type=cli._positive_int("--nu2", 0, 100), default=3, help="post-smoothing steps per level")
     cli.add_thread_options(p)
-    p.add_argument("--json", type=cli._writable, metavar="PATH|-",
-                   help="write the report as JSON to PATH (-: standard output)")
-    p.add_argument("--vtu", type=cli._with_suffix("--vtu", (".vtu",)), metavar="PATH",
-                   help="write the mesh with displacement, stresses and contact states (ParaView)")
+    cli.add_report_options(p)
     p.add_argument("-q", "--quiet", action="store_true", help="print nothing but errors")
 
 

@@ -24,15 +24,8 @@ def add_cylinders_parser(sub):
                    help="nmg: Algorithm 2 with the tied coarse correction of two bodies; tnnmg: truncated nonsmooth Newton multigrid")
     c.add_argument("--E2", type=cli._nonneg_float("--E2", positive=True), default=cylinders.E, help="Young's modulus of the lower body")
     c.add_argument("--nu2", type=float, default=cylinders.NU, help="Poisson's ratio of the lower body")
-    c.add_argument("--tol", type=cli._nonneg_float("--tol", positive=True), default=1e-11,
-                   help="stop when the correction's energy norm ||u^{k+1} - u^k||_A falls below this")
-    c.add_argument("--max-cycles", type=cli._positive_int("--max-cycles", 1, cli.MAX_CYCLES), default=200,
-                   help="stop as not converged after this many cycles")
-    c.add_argument("--cycle", choices=["V", "W", "F"], default="F", help="multigrid cycle type")
-    c.add_argument("--json", type=cli._writable, metavar="PATH|-",
-                   help="write the report as JSON to PATH (-: standard output)")
-    c.add_argument("--vtu", type=cli._with_suffix("--vtu", (".vtu",)), metavar="PATH",
-                   help="write the mesh with displacement, stresses and contact states (ParaView)")
+    cli.add_stop_options(c)
+    cli.add_report_options(c)
     c.add_argument("--plot", type=cli._with_suffix("--plot", cli.PLOT_SUFFIXES), metavar="PATH",
                    help="write the boundary stresses with the stick and slip zones (.png, .pdf or .svg)")
     c.add_argument("-q", "--quiet", action="store_true", help="print nothing but errors")
@@ -99,16 +92,9 @@ def add_spheres_parser(sub):
     c.add_argument("--nu2", type=float, default=spheres.NU, help="Poisson's ratio of the lower body")
     c.add_argument("--displacement", type=cli._nonneg_float("--displacement", positive=True), default=spheres.DISPLACEMENT,
                    help="displacement of each flat face towards the other")
-    c.add_argument("--tol", type=cli._nonneg_float("--tol", positive=True), default=1e-11,
-                   help="stop when the correction's energy norm ||u^{k+1} - u^k||_A falls below this")
-    c.add_argument("--max-cycles", type=cli._positive_int("--max-cycles", 1, cli.MAX_CYCLES), default=200,
-                   help="stop as not converged after this many cycles")
-    c.add_argument("--cycle", choices=["V", "W", "F"], default="F", help="multigrid cycle type")
+    cli.add_stop_options(c)
     cli.add_thread_options(c)
-    c.add_argument("--json", type=cli._writable, metavar="PATH|-",
-                   help="write the report as JSON to PATH (-: standard output)")
-    c.add_argument("--vtu", type=cli._with_suffix("--vtu", (".vtu",)), metavar="PATH",
-                   help="write the mesh with displacement, stresses and contact states (ParaView)")
+    cli.add_report_options(c)
     c.add_argument("-q", "--quiet", action="store_true", help="print nothing but errors")
 
 
