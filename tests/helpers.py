@@ -8,6 +8,7 @@ import pytest
 import scipy.sparse as sp
 
 from contactmg.results.result import SLIP, STICK
+from contactmg.solve.solver import Solver
 
 
 def check_switch_refuses_bad_values(p, name, methods=("tnnmg", "fixed-point")):
@@ -49,3 +50,16 @@ def assert_contact_conditions(res, F, gaps, rtol=1e-8):
     state = res.contact_state
     assert np.all((state == STICK) == (active & (uT == 0)))
     assert np.all((state == SLIP) == slip)
+
+
+def contraction(problem, cycles=14, seed=0):
+    """Zero load, random start: the correction norms decay like the error; the rate is the
+    geometric mean of the last five ratios. Returns (rate, seconds per cycle)."""
+    rng = np.random.default_rng(seed)
+    u0 = rng.standard_normal(problem.load.shape)
+    # a solver of its own, whose core takes the zero load (the problem's kept solver is untouched)
+    res = Solver(problem, problem.default_options).solve(
+        u0, load=np.zeros_like(problem.load), options=dict(tol=1e-300, rtol=1e-300, max_cycles=cycles))
+    c = np.asarray(res.history["correction_norm"])
+    ratios = c[1:] / c[:-1]
+    return float(np.exp(np.mean(np.log(ratios[-5:])))), res.solve_seconds / res.cycles

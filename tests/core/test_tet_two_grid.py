@@ -15,20 +15,9 @@ from contactmg.mesh.generators_3d import box
 from contactmg.mesh.hierarchy import MeshHierarchy
 from contactmg.model.material import Material
 from contactmg.solve.contact_problem import ContactProblem, Dirichlet
-from contactmg.solve.solver import Solver
+from helpers import contraction
 
 
-def contraction(problem, cycles=14, seed=0):
-    """Zero load, random start: the correction norms decay like the error; the rate is the
-    geometric mean of the last five ratios. Returns (rate, seconds per cycle)."""
-    rng = np.random.default_rng(seed)
-    u0 = rng.standard_normal(problem.load.shape)
-    # a solver of its own, whose core takes the zero load (the problem's kept solver is untouched)
-    res = Solver(problem, problem.default_options).solve(
-        u0, load=np.zeros_like(problem.load), options=dict(tol=1e-300, rtol=1e-300, max_cycles=cycles))
-    c = np.asarray(res.history["correction_norm"])
-    ratios = c[1:] / c[:-1]
-    return float(np.exp(np.mean(np.log(ratios[-5:])))), res.solve_seconds / res.cycles
 
 E, NU = 2000.0, 0.28
 
