@@ -20,52 +20,72 @@ from ..model.frames import to_local
 VIOLATION_TOL = 1e-6
 
 
-def contact_conditions(problem, result) -> Dict[str, float]:
+def contact_conditions(problem, result, raise_on_violation: bool = False, tol: float = VIOLATION_TOL) -> Dict[str, float]:
     """Relative violations of the discrete contact conditions by `result` (a ContactResult of
     `problem`), each >= 0, plus "max", their maximum:
 
-    - interior: max |(A u - f)| over the free dofs off the contact boundary,
-    - inactive_force: max |s_n| over contact nodes off the obstacle (u_n < g), and |s_T| there
+    - interior: max |(A w - f)| over the free dofs off the contact boundary,
+    - inactive_force: max |s_n| over contact nodes off the obstacle (w_n < g), and |s_T| there
       unless friction acts there (Tresca),
-    - tension: max (A u - f)_{p,n} over nodes in contact (must be <= 0),
+    - tension: max (A w - f)_{p,n} over nodes in contact (must be <= 0),
     - friction_bound: max (|s_T| - s_p) where friction acts (Coulomb: nodes in contact, s_p =
       F_p |s_n|; Tresca: every contact node, the given bound; frictionless: nodes in contact, 0),
-    - slip_direction: max |s_T + s_p u_T/|u_T|| over the nodes where friction acts and u_T != 0,
+    - slip_direction: max |s_T + s_p v_T/|v_T|| over the nodes where friction acts and v_T != 0,
     all divided by the force scale (the largest contact force, support reaction or load; the
-    stiffness scale max|A| max|u| for a body that carries no force); and penetration: max (u_n - g)
+    stiffness scale max|A| max|w| for a body that carries no force); and penetration: max (w_n - g)
     divided by the displacement scale of the problem (the largest displacement, prescribed
     displacement or gap; it does not vanish when every gap and normal displacement is zero). The
-    contact state is recomputed from u (u_n >= g in contact, u_T == 0 sticking, both up to
-    round-off), not taken from the result; the frames are the result's (result.contact_frames)."""
+    contact state is recomputed from w (w_n >= g in contact, v_T == 0 sticking, both up to
+    round-off), not taken from the result; the frames are the result's (result.contact_frames).
+
+    What the conditions are posed on:
+
+    - the unknowns w = problem.relative_displacement(u) of the canonical displacement u =
+      result.displacement, with the matrix problem.A and the load of those unknowns. One body: w = u.
+      Several bodies: at a nonmortar node w is its displacement relative to the mortar side, and A,
+      f are the transformed T^T A T, T^T f (the conditions are nodal only in w).
+    - the slip v_T = w_T - w0_T: the tangential displacement since the slip origin w0 the solve was
+      given (result.slip_origin: the previous step of a load path, whose incremental friction law
+      acts on the slip of the step); without one, w0 = 0. The normal conditions use w itself.
+    - the load and the prescribed displacements of the solve (result.load, result.fixed_values:
+      a load path step's own), else the problem's.
+
+    With raise_on_violation, a ValueError names every condition violated by more than `tol`."""
     c = problem.contact
-    u = np.asarray(result.displacement)
-    r = problem.A.matvec(u) - problem.load
+    w = problem.relative_displacement(np.asarray(result.displacement, dtype=float))
+    load = problem.load if getattr(result, "load", None) is None else result.load
+    fixed_values = problem.fixed_values if getattr(result, "fixed_values", None) is None else result.fixed_values
+    r = problem.A.matvec(w) - load
+    origin = getattr(result, "slip_origin", None)
+    slip = w if origin is None else w - origin
     Q = result.contact_frames
-    ul = to_local(Q, u[c.nodes])
+    ul = to_local(Q, w[c.nodes])
+    vl = to_local(Q, slip[c.nodes])
     sl = to_local(Q, r[c.nodes])
     # a tangential component fixed by a Dirichlet condition takes no part in friction: its force is a reaction
     if len(c.nodes):
-        tied = problem.solver.core.frame_fixed.astype(bool)
-        ul[tied], sl[tied] = 0.0, 0.0
+        tied = getattr(result, "frame_fixed", None)
+        tied = (problem.solver.core.frame_fixed if tied is None else tied).astype(bool)
+        ul[tied], vl[tied], sl[tied] = 0.0, 0.0, 0.0
     # Forces are measured against the force scale of the problem: the largest contact force, support
     # reaction or load. A body that carries no force at all (pushed onto nothing, it only translates)
-    # has none; there the stiffness scale max|A| max|u| measures what round-off is.
+    # has none; there the stiffness scale max|A| max|w| measures what round-off is.
     fixed = problem.fixed.astype(bool)
     scale = max(float(np.abs(sl[:, 0]).max(initial=0.0)), float(np.abs(r[fixed]).max(initial=0.0)),
-                float(np.abs(problem.load).max(initial=0.0)))
-    stiffness = float(np.abs(problem.A.data).max(initial=0.0)) * float(np.abs(u).max(initial=0.0))
+                float(np.abs(load).max(initial=0.0)))
+    stiffness = float(np.abs(problem.A.data).max(initial=0.0)) * float(np.abs(w).max(initial=0.0))
     if scale <= 1e-9 * stiffness:
         scale = stiffness
     scale = max(scale, 1e-300)
     free = ~fixed
     free[c.nodes] = False
     out = {"interior": float(np.abs(r[free]).max(initial=0.0)) / scale}
-    # The core's tests u_n == g and u_T == 0 are exact in its frames; rebuilt here from the canonical
-    # u through a rotated frame they carry round-off, hence the relative tolerance.
-    eps = 1e-12 * max(float(np.abs(u).max(initial=0.0)), float(np.abs(c.gaps).max(initial=0.0)), 1e-300)
+    # The core's tests w_n == g and v_T == 0 are exact in its frames; rebuilt here from the canonical
+    # u through a rotated frame (and T^{-1}) they carry round-off, hence the relative tolerance.
+    eps = 1e-12 * max(float(np.abs(w).max(initial=0.0)), float(np.abs(c.gaps).max(initial=0.0)), 1e-300)
     active = ul[:, 0] >= c.gaps - eps
-    ut = np.linalg.norm(ul[:, 1:], axis=1)
-    ut[ut <= eps] = 0.0
+    vt = np.linalg.norm(vl[:, 1:], axis=1)
+    vt[vt <= eps] = 0.0
     st = np.linalg.norm(sl[:, 1:], axis=1)
     law = problem.law
     # Where friction acts: Coulomb at nodes in contact (bound F |s_n|); Tresca at every contact node,
@@ -81,16 +101,35 @@ def contact_conditions(problem, result) -> Dict[str, float]:
                                 float(st[off & ~rubs].max(initial=0.0))) / scale
     out["tension"] = max(0.0, float(sl[active, 0].max(initial=0.0))) / scale
     out["friction_bound"] = max(0.0, float((st - s)[rubs].max(initial=0.0))) / scale
-    slide = rubs & (ut > 0)
+    slide = rubs & (vt > 0)
     if np.any(slide):
-        dev = sl[slide, 1:] + s[slide, None] * ul[slide, 1:] / ut[slide, None]
+        dev = sl[slide, 1:] + s[slide, None] * vl[slide, 1:] / vt[slide, None]
         out["slip_direction"] = float(np.linalg.norm(dev, axis=1).max()) / scale
     else:
         out["slip_direction"] = 0.0
-    # Not max |u_n|: on a tilted plane with zero gaps every u_n is round-off. The displacement scale
+    # Not max |w_n|: on a tilted plane with zero gaps every w_n is round-off. The displacement scale
     # of a loaded body is positive: it moves, or is held by prescribed displacements, or its gaps are.
-    disp = max(float(np.abs(u).max(initial=0.0)), float(np.abs(problem.fixed_values).max(initial=0.0)),
+    disp = max(float(np.abs(w).max(initial=0.0)), float(np.abs(fixed_values).max(initial=0.0)),
                float(np.abs(c.gaps).max(initial=0.0)), 1e-300)
     out["penetration"] = max(0.0, float((ul[:, 0] - c.gaps).max(initial=0.0))) / disp
     out["max"] = max(out.values())
+    if raise_on_violation:
+        raise_violations(out, tol)
     return out
+
+
+def raise_violations(violations: Dict[str, float], tol: float = VIOLATION_TOL) -> None:
+    """Raise a ValueError naming every condition of `violations` (a dict of contact_conditions)
+    above `tol`, with its value; return quietly when none is."""
+    if not (isinstance(tol, (int, float)) and not isinstance(tol, bool) and tol >= 0):
+        raise ValueError(f"tol must be a number >= 0, got {tol!r}")
+    bad = {k: v for k, v in violations.items() if k != "max" and not v <= tol}
+    if bad:
+        named = ", ".join(f"{k} {v:.3g}" for k, v in sorted(bad.items(), key=lambda kv: -kv[1]))
+        raise ValueError(f"the result violates the contact conditions (relative, tolerance {tol:.3g}): {named}")
+
+
+def check_contact(problem, result, tol: float = VIOLATION_TOL) -> Dict[str, float]:
+    """contact_conditions(problem, result) as a verdict: the dict of relative violations when
+    every one is <= `tol`, else a ValueError naming the violated conditions and their values."""
+    return contact_conditions(problem, result, raise_on_violation=True, tol=tol)

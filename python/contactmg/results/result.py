@@ -59,6 +59,18 @@ class ContactResult:
     benchmark: Optional[str] = None
     # the solver options the solve used, every problem-dependent default resolved (field -> value)
     options: Optional[Dict] = None
+    # The problem solved (the Solver sets it; None for a result made otherwise): checks, reactions,
+    # stresses and the summary read its matrix, load, Dirichlet data and materials.
+    problem: Optional[object] = field(default=None, repr=False, compare=False)
+    # What the solve was given in place of the problem's own, in the problem's unknowns (w for
+    # several bodies), None where it used the problem's: the nodal load (n, d), the prescribed
+    # displacements (n, d) and the slip origin (n, d), the displacement the incremental friction
+    # law measures slip from (a load path's previous step).
+    load: Optional[np.ndarray] = field(default=None, repr=False, compare=False)
+    fixed_values: Optional[np.ndarray] = field(default=None, repr=False, compare=False)
+    slip_origin: Optional[np.ndarray] = field(default=None, repr=False, compare=False)
+    # (nc, d) of the contact frames' components fixed by Dirichlet data (the core's frame_fixed)
+    frame_fixed: Optional[np.ndarray] = field(default=None, repr=False, compare=False)
 
     def __post_init__(self):
         if self.contact_frames is None:

@@ -46,6 +46,10 @@ class Solver:
         if self.options.local_smoothing:
             self._smooth_locally(self.core)
         self.build_seconds = time.perf_counter() - t0
+        # The data the kept core holds from the last solve that set it (None: the problem's own; no
+        # slip origin): every result records what it was solved with, for its checks. One dict,
+        # shared with the with_options copies that solve on the same core.
+        self._given = {"load": None, "fixed_values": None, "slip_origin": None}
         if self.options.release_hierarchy:
             problem.hierarchy.release_coarse()
             problem.release_vectors()
@@ -132,11 +136,14 @@ class Solver:
         if opts.method == "fixed-point" and (p.friction.law != "coulomb" or p.law == "linear"):
             raise ValueError("the fixed-point method (Algorithm 1) needs Coulomb friction on a contact boundary")
         if load is not None:
-            self.core.set_load(np.ascontiguousarray(load, dtype=float))
+            self._given["load"] = np.ascontiguousarray(load, dtype=float)
+            self.core.set_load(self._given["load"])
         if fixed_values is not None:
-            self.core.set_fixed_values(np.ascontiguousarray(fixed_values, dtype=float))
+            self._given["fixed_values"] = np.ascontiguousarray(fixed_values, dtype=float)
+            self.core.set_fixed_values(self._given["fixed_values"])
         if slip_origin is not None:
-            self.core.set_slip_origin(np.ascontiguousarray(slip_origin, dtype=float))
+            self._given["slip_origin"] = np.ascontiguousarray(slip_origin, dtype=float)
+            self.core.set_slip_origin(self._given["slip_origin"])
         if opts.method == "linear":
             reference = self.solve(None, options=opts.replace(method="nmg"))
             return self.solve_known_state(reference, opts, progress=progress, error_reference=error_reference)
@@ -200,6 +207,10 @@ class Solver:
         raw["u"] = p.to_canonical(np.asarray(raw["u"]))
         res = ContactResult.from_raw(p, raw, opts.method)
         res.setup_seconds = p.assembly_seconds + build_seconds
+        res.problem = p
+        res.load, res.fixed_values, res.slip_origin = (self._given[k] for k in ("load", "fixed_values", "slip_origin"))
+        if len(p.contact.nodes):
+            res.frame_fixed = np.asarray(self.core.frame_fixed)
         res.options = opts.to_dict()
         res.extra["cycle_options"] = {"cycle": opts.cycle, "nu1": opts.nu1, "nu2": opts.nu2}
         res.extra["omega"] = float(raw.get("omega", 1.0))
