@@ -96,14 +96,18 @@ def to_meshio(mesh: Mesh, point_data: Optional[Dict[str, np.ndarray]] = None,
     pd = {k: _pad(v) for k, v in (point_data or {}).items()}
     cd = {"gmsh:physical": [np.zeros(mesh.num_cells, np.int64), mesh.facet_tags]}
     for k, v in (cell_data or {}).items():
-        cd[k] = [np.asarray(v), np.zeros(len(mesh.facets))]
+        v = np.asarray(v)
+        if len(v) != mesh.num_cells:
+            raise ValueError(f"cell data {k!r} needs one entry per cell ({mesh.num_cells}), got {len(v)}")
+        cd[k] = [v, np.zeros((len(mesh.facets),) + v.shape[1:], v.dtype)]
     return meshio.Mesh(pts, blocks, point_data=pd, cell_data=cd)
 
 
 def write_mesh(path: Union[str, os.PathLike], mesh: Mesh, point_data: Optional[Dict[str, np.ndarray]] = None,
-               **kwargs) -> None:
+               cell_data: Optional[Dict[str, np.ndarray]] = None, **kwargs) -> None:
     """Write through meshio in the format the extension names: .vtu, .vtk, .msh (Gmsh 2.2),
-    .xdmf/.xmf; meshio's `file_format=` picks another format explicitly."""
+    .xdmf/.xmf; meshio's `file_format=` picks another format explicitly. `point_data`: arrays of
+    one row per node; `cell_data`: of one row per cell (the facets written along get zeros)."""
     path = os.fspath(path)
     ext = os.path.splitext(path)[1].lower()
     if "file_format" not in kwargs:
@@ -116,7 +120,7 @@ def write_mesh(path: Union[str, os.PathLike], mesh: Mesh, point_data: Optional[D
         raise ValueError(f"cannot write {path}: directory {folder} does not exist")
     if not os.access(folder, os.W_OK):
         raise ValueError(f"cannot write {path}: directory {folder} is not writable")
-    m = to_meshio(mesh, point_data)
+    m = to_meshio(mesh, point_data, cell_data)
     if kwargs["file_format"].startswith("gmsh"):
         m.cell_data["gmsh:geometrical"] = m.cell_data["gmsh:physical"]
     try:

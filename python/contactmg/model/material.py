@@ -41,3 +41,12 @@ class Material:
     def plane_strain_modulus(self) -> float:
         """E* = E / (1 - nu^2), the modulus of Hertz's plane-strain formulas."""
         return self.E / (1 - self.nu ** 2)
+
+
+def cell_moduli(mesh, material) -> tuple:
+    """Young's modulus E (ncells,) and Poisson ratio nu (ncells,) of every cell of `mesh` (a
+    Mesh): a Material holds one pair for every cell."""
+    if not isinstance(material, Material):
+        raise TypeError(f"material must be a Material, got {type(material).__name__}")
+    m = mesh.num_cells
+    return np.full(m, material.E), np.full(m, material.nu)

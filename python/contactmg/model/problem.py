@@ -492,7 +492,8 @@ class Problem:
 
     @property
     def load(self) -> np.ndarray:
-        """The nodal load (n, d) of the problem's unknowns."""
+        """The nodal load (n, d) of the problem's unknowns: one body, that of u; several bodies,
+        T^T f of w (load_canonical: f of u)."""
         if self._load is None and self._load_recipe is not None:
             self._load = assemble_load(self.mesh, *self._load_recipe)
         return self._load
@@ -522,8 +523,11 @@ class Problem:
 
     @property
     def A(self):
-        """The stiffness matrix of the problem's unknowns (no boundary conditions). A solver may take
-        it over (take_matrix); asking for it again assembles it anew."""
+        """The stiffness matrix of the problem's unknowns (no boundary conditions): one body, that
+        of the displacement u; several bodies, T^T A T of the unknowns w = T^{-1} u (relative
+        displacements at the nonmortar nodes, see relative_displacement), not the bodies' own
+        stiffness of u (A_canonical). A solver may take it over (take_matrix); asking for it again
+        assembles it anew."""
         if self._A is None:
             self._A = self._assemble_matrix()
         return self._A
@@ -581,7 +585,7 @@ class Problem:
         data = result.point_data()
         if self.multibody:
             data["body_id"] = self.body_id
-        write_mesh(path, self.mesh, point_data=data)
+        write_mesh(path, self.mesh, point_data=data, cell_data=result.cell_data())
 
 
 def _holds_rigid_motion(x: np.ndarray, fixed: np.ndarray) -> bool:

@@ -7,8 +7,10 @@ from typing import Dict, Optional, Sequence
 
 import numpy as np
 
-from ..model.frames import contact_frames, to_canonical
+from ..model.frames import contact_frames, to_canonical, to_local
 from ..mesh.mesh import Mesh
+from .checks import VIOLATION_TOL, contact_conditions
+from .fields import cell_strain, hooke, nodal_average, problem_cell_moduli, von_mises
 
 # node_state values
 NOT_CONTACT, FREE, STICK, SLIP = -1, 0, 1, 2
@@ -181,27 +183,179 @@ class ContactResult:
         return {"contact_nodes": int(np.sum(s > 0)), "stick_nodes": int(np.sum(s == STICK)),
                 "slip_nodes": int(np.sum(s == SLIP))}
 
+    # -- engineering output ---------------------------------------------------------------------
+    def _known_problem(self, what: str):
+        if self.problem is None:
+            raise ValueError(f"{what} needs the problem of this result (result.problem, set by the Solver): "
+                             "set result.problem = problem")
+        return self.problem
+
+    def check(self, raise_on_violation: bool = False, tol: float = VIOLATION_TOL) -> Dict[str, float]:
+        """The relative violations of the discrete contact conditions (checks.contact_conditions)
+        by this result; with raise_on_violation a ValueError names every one above `tol`."""
+        return contact_conditions(self._known_problem("check()"), self, raise_on_violation, tol)
+
+    def canonical_load(self) -> np.ndarray:
+        """The nodal load (n, d) of the solve on the canonical displacement (body force and
+        tractions of every body, the units as given): for several bodies T^{-T} of the load of
+        the unknowns."""
+        p = self._known_problem("canonical_load()")
+        if self.load is None:
+            return p.load_canonical if p.multibody else p.load
+        return self.load - p.N.T @ self.load if p.multibody else self.load
+
+    def residual(self) -> np.ndarray:
+        """A u - f (n, d) of the canonical displacement u with the bodies' own stiffness: at a fixed
+        component the support reaction, at a contact node the contact force, elsewhere ~0."""
+        p = self._known_problem("residual()")
+        u = np.asarray(self.displacement, dtype=float)
+        Au = (p.A_canonical @ u.ravel()).reshape(u.shape) if p.multibody else p.A.matvec(u)
+        return Au - self.canonical_load()
+
+    def reactions(self) -> Dict:
+        """The support reaction of every Dirichlet condition (force vector (d,) in global x, y(, z),
+        the units of the load): the sum of A u - f over the components it fixes at the nodes of its
+        facets. Keys: its tag (a tuple for several tags; conditions on the same tags add up), for
+        several bodies (body index, tag). A component fixed by two conditions counts for the
+        first. With the contact forces and the load they balance: sum = -(total load)."""
+        p = self._known_problem("reactions()")
+        r = self.residual()
+        fixed = p.fixed.astype(bool)
+        claimed = np.zeros_like(fixed)
+        offsets = p.offsets if p.multibody else [0]
+        out: Dict = {}
+        for k, body in enumerate(p.bodies):
+            mesh = body.hierarchy.finest
+            for bc in body.dirichlet:
+                comps = np.ones(mesh.dim, bool) if callable(bc.value) else np.array([v is not None for v in bc.value])
+                mask = np.zeros_like(fixed)
+                mask[mesh.boundary_nodes(bc.tags) + offsets[k]] = comps
+                mask &= fixed & ~claimed
+                claimed |= mask
+                key = bc.tags[0] if len(bc.tags) == 1 else tuple(bc.tags)
+                key = (k, key) if p.multibody else key
+                out[key] = out.get(key, 0.0) + np.where(mask, r, 0.0).sum(axis=0)
+        return out
+
+    def contact_forces(self) -> Dict[str, np.ndarray]:
+        """The total contact force (d,) in global x, y(, z), the units of the load: one body, key
+        "obstacle", the force of the obstacle on the body; several bodies, key "pair k", the force
+        of the mortar body on the nonmortar body of pair k (the mortar body feels its opposite).
+        The sum of A u - f over the contact nodes, less their Dirichlet-fixed components (those
+        count as reactions)."""
+        p = self._known_problem("contact_forces()")
+        c = p.contact
+        f = np.where(p.fixed[c.nodes].astype(bool), 0.0, self.residual()[c.nodes])
+        if not p.multibody:
+            return {"obstacle": f.sum(axis=0)}
+        return {f"pair {k}": f[p.pair_of_contact == k].sum(axis=0) for k in range(len(p.pairs))}
+
+    def strain(self, at: str = "cells") -> np.ndarray:
+        """The small strain (m, 3, 3), dimensionless: at="cells" at every cell centroid, at="nodes"
+        recovered at the nodes (the measure-weighted average of their cells'). 2D: plane strain."""
+        return self._at(cell_strain(self.mesh, self.displacement), at)
+
+    def stress(self, at: str = "cells") -> np.ndarray:
+        """The Cauchy stress (m, 3, 3) in the units of E (Hooke's law with each cell's E and nu, 2D
+        plane strain: sigma_zz = nu (sigma_xx + sigma_yy)): at="cells" at every cell centroid,
+        at="nodes" recovered at the nodes (the measure-weighted average of their cells')."""
+        E, nu = problem_cell_moduli(self._known_problem("stress()"))
+        return self._at(hooke(cell_strain(self.mesh, self.displacement), E, nu), at)
+
+    def von_mises(self, at: str = "cells") -> np.ndarray:
+        """The von Mises stress (m,) in the units of E of stress(at): per cell, or of the recovered
+        nodal stress."""
+        return von_mises(self.stress(at))
+
+    def _at(self, cell_values: np.ndarray, at: str) -> np.ndarray:
+        if at == "cells":
+            return cell_values
+        if at == "nodes":
+            return nodal_average(self.mesh, cell_values)
+        raise ValueError(f"at must be 'cells' or 'nodes', got {at!r}")
+
+    def slip(self) -> np.ndarray:
+        """The slip (n, d) in global x, y(, z), the units of the displacement: at the contact nodes
+        in contact (stick or slip) the tangential part of w - w0, w the unknowns (relative to the
+        mortar side for several bodies) and w0 the slip origin of the solve (a load path's
+        previous step; none: 0), zero elsewhere."""
+        w = np.asarray(self.displacement, dtype=float)
+        if self.problem is not None:
+            w = self.problem.relative_displacement(w)
+        if self.slip_origin is not None:
+            w = w - self.slip_origin
+        local = to_local(self.contact_frames, w[self.contact_nodes])
+        local[:, 0] = 0.0
+        local[self.contact_state <= FREE] = 0.0
+        out = np.zeros_like(w)
+        out[self.contact_nodes] = to_canonical(self.contact_frames, local)
+        return out
+
     # -- output ---------------------------------------------------------------------------------
     def point_data(self) -> Dict[str, np.ndarray]:
-        """The per-node fields written to VTU files (displacement, contact state and stresses)."""
+        """The per-node fields written to VTU files:
+        displacement (global x, y(, z)); node_state (-1 no contact node, 0 free, 1 stick, 2 slip);
+        contact_pressure (-normal force / boundary measure: positive in compression, 0 off the
+        contact nodes); tangential_traction (tangential force / measure, global x, y(, z));
+        slip (see slip(), global); normal_stress and tangential_stress (the contact tractions in
+        the nodal contact frame [n] and [t(, s)], normal negative in compression); with the
+        problem known, von_mises (of the recovered nodal stress)."""
         n, d = self.mesh.num_points, self.mesh.dim
         sn = np.zeros(n)
         st = np.zeros((n, d - 1))
         sn[self.contact_nodes] = self.normal_stress
         st[self.contact_nodes] = self.tangential_stress
-        return {"displacement": self.displacement, "normal_stress": sn,
-                "tangential_stress": st[:, 0] if d == 2 else st, "node_state": self.node_state.astype(np.int32)}
+        tt = np.zeros((n, d))
+        local = np.c_[np.zeros(len(self.contact_nodes)), self.tangential_stress]
+        tt[self.contact_nodes] = to_canonical(self.contact_frames, local)
+        out = {"displacement": self.displacement, "normal_stress": sn,
+               "tangential_stress": st[:, 0] if d == 2 else st, "node_state": self.node_state.astype(np.int32),
+               "contact_pressure": -sn, "tangential_traction": tt, "slip": self.slip()}
+        if self.problem is not None:
+            out["von_mises"] = self.von_mises("nodes")
+        return out
+
+    def cell_data(self) -> Dict[str, np.ndarray]:
+        """The per-cell fields written to VTU files (the problem known, else none): stress and
+        strain at the cell centroids as 9 components xx, xy, xz, yx, ..., zz (ParaView's tensor),
+        von_mises."""
+        if self.problem is None:
+            return {}
+        sigma = self.stress()
+        m = self.mesh.num_cells
+        return {"stress": sigma.reshape(m, 9), "strain": self.strain().reshape(m, 9), "von_mises": von_mises(sigma)}
 
     def write_vtu(self, path) -> None:
-        """Write a VTU file (ParaView) of the mesh with point data displacement, normal_stress,
-        tangential_stress, node_state. Other formats: io.write_mesh(path, result.mesh,
-        point_data=result.point_data())."""
+        """Write a VTU file (ParaView) of the mesh with the point data of point_data() and the cell
+        data of cell_data(). Other formats: io.write_mesh(path, result.mesh,
+        point_data=result.point_data(), cell_data=result.cell_data())."""
         from ..mesh.io import write_mesh
 
         if not os.fspath(path).lower().endswith(".vtu"):
             raise ValueError(f"write_vtu writes VTU files: {os.fspath(path)} does not end in .vtu (for other formats use "
                              "contactmg.write_mesh(path, result.mesh, point_data=result.point_data()))")
-        write_mesh(path, self.mesh, point_data=self.point_data())
+        write_mesh(path, self.mesh, point_data=self.point_data(), cell_data=self.cell_data())
+
+    def summary(self) -> str:
+        """A plain-text table of the solve: method, law, status, cycles, dofs, solve seconds, the
+        contact/stick/slip node counts, the contact extent, and with the problem known the total
+        contact force, the reactions per Dirichlet tag, the largest von Mises stress and the
+        largest violation of the contact conditions (check())."""
+        rows = [("method", self.method), ("law", self.law),
+                ("converged", f"{self.converged} ({self.status})"), ("cycles", str(self.cycles)),
+                ("dofs", str(self.displacement.size)), ("solve seconds", f"{self.solve_seconds:.4g}")]
+        rows += [(k.replace("_", " "), str(v)) for k, v in self.counts().items()]
+        rows.append(("contact extent", f"{self.contact_extent:.6g}"))
+        if self.problem is not None:
+            vec = lambda v: "(" + ", ".join(f"{x:.6g}" for x in np.asarray(v)) + ")"
+            rows += [(f"contact force {k}", vec(v)) for k, v in self.contact_forces().items()]
+            rows += [(f"reaction {k}", vec(v)) for k, v in self.reactions().items()]
+            rows.append(("max von Mises", f"{float(self.von_mises().max(initial=0.0)):.6g}"))
+            check = self.check()
+            worst = max((k for k in check if k != "max"), key=lambda k: check[k])
+            rows.append(("max violation", f"{check['max']:.3g} ({worst}); penetration {check['penetration']:.3g}"))
+        width = max(len(k) for k, _ in rows)
+        return "\n".join(f"{k:<{width}}  {v}" for k, v in rows)
 
 
 def _arc_length(points: np.ndarray, facets: np.ndarray, nodes: np.ndarray) -> np.ndarray:
