@@ -108,3 +108,17 @@ def test_a_result_without_its_problem_and_bad_tolerances_are_refused(cylinders):
     for tol in (-1.0, "1e-6", None):
         with pytest.raises(ValueError, match="tol must be a number"):
             check_contact(p, r, tol=tol)
+
+
+def test_a_two_body_load_path_meets_the_conditions_on_every_step():
+    """The steps of several bodies start and measure slip from the previous step's unknowns w."""
+    from contactmg.solve.loadpath import LoadPath
+
+    p = cylinders_problem(5, friction=0.4)
+    path = LoadPath.proportional(p, 3).solve(tol=1e-12)
+    assert path.converged
+    for k, r in enumerate(path.steps):
+        if k:
+            previous = path.steps[k - 1].displacement
+            assert np.array_equal(r.slip_origin, p.relative_displacement(previous))
+        assert r.check(raise_on_violation=True)["max"] <= VIOLATION_TOL

@@ -122,5 +122,6 @@ def test_uniaxial_block_solved_by_the_core():
     R = r.reactions()
     np.testing.assert_allclose(R[RECT_BOTTOM], [0.0, P], rtol=0, atol=1e-9 * P)
     np.testing.assert_allclose(R[RECT_LEFT], [0.0, 0.0], rtol=0, atol=1e-9 * P)
+    assert r.contact_forces() == {}  # no contact boundary
     with pytest.raises(ValueError, match="at must be 'cells' or 'nodes'"):
         r.stress("centroids")

@@ -242,9 +242,11 @@ class ContactResult:
         "obstacle", the force of the obstacle on the body; several bodies, key "pair k", the force
         of the mortar body on the nonmortar body of pair k (the mortar body feels its opposite).
         The sum of A u - f over the contact nodes, less their Dirichlet-fixed components (those
-        count as reactions)."""
+        count as reactions). Without a contact boundary: {}."""
         p = self._known_problem("contact_forces()")
         c = p.contact
+        if len(c.nodes) == 0:
+            return {}
         f = np.where(p.fixed[c.nodes].astype(bool), 0.0, self.residual()[c.nodes])
         if not p.multibody:
             return {"obstacle": f.sum(axis=0)}

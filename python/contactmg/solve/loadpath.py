@@ -146,8 +146,10 @@ class LoadPath:
         zero = np.zeros((p.mesh.num_points, p.mesh.dim))
         for k in range(len(self)):
             data = self.step_data(k)
-            res = solver.solve(previous if warm_start else None, load=data.load, fixed_values=data.fixed_values,
-                               slip_origin=zero if previous is None else previous)
+            # the core's unknowns: w = T^{-1} u for several bodies (slip is relative), u for one
+            start = zero if previous is None else p.relative_displacement(previous)
+            res = solver.solve(start if warm_start and previous is not None else None, load=data.load,
+                               fixed_values=data.fixed_values, slip_origin=start)
             build = solver.build_seconds if k == 0 else 0.0
             res.setup_seconds = p.assembly_seconds + build  # hierarchy, assembly and the core's build (step 1)
             res.extra.update(step=k + 1, parameter=data.parameter, build_seconds=build,
