@@ -136,13 +136,13 @@ class Solver:
         if opts.method == "fixed-point" and (p.friction.law != "coulomb" or p.law == "linear"):
             raise ValueError("the fixed-point method (Algorithm 1) needs Coulomb friction on a contact boundary")
         if load is not None:
-            self._given["load"] = np.ascontiguousarray(load, dtype=float)
+            self._given["load"] = np.array(load, dtype=float)  # a copy: the caller may reuse its array
             self.core.set_load(self._given["load"])
         if fixed_values is not None:
-            self._given["fixed_values"] = np.ascontiguousarray(fixed_values, dtype=float)
+            self._given["fixed_values"] = np.array(fixed_values, dtype=float)
             self.core.set_fixed_values(self._given["fixed_values"])
         if slip_origin is not None:
-            self._given["slip_origin"] = np.ascontiguousarray(slip_origin, dtype=float)
+            self._given["slip_origin"] = np.array(slip_origin, dtype=float)
             self.core.set_slip_origin(self._given["slip_origin"])
         if opts.method == "linear":
             reference = self.solve(None, options=opts.replace(method="nmg"))
