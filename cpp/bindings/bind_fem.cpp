@@ -80,16 +80,27 @@ void bind_fem(py::module_& m) {
     dispatch_cell(v.type, [&](auto T) { check_cells<decltype(T)::value>(v.X, v.n, v.C, v.m); });
   });
 
-  m.def("assemble_elasticity", [](DArr points, IArr cells, const std::string& cell_type, double E, double nu) -> py::object {
+  m.def("assemble_elasticity", [](DArr points, IArr cells, const std::string& cell_type, DArr E, DArr nu) -> py::object {
+    // E and nu: one number each, or one per cell (a body of several materials)
     MeshView v = view(points, cells, cell_type);
-    Material mat{E, nu};
-    mat.validate();
+    const bool per_cell = E.ndim() == 1;
+    if (per_cell) {
+      require_shape(E, "E", {(py::ssize_t)v.m});
+      require_shape(nu, "nu", {(py::ssize_t)v.m});
+    } else if (E.ndim() != 0 || nu.ndim() != 0) {
+      throw InputError("E and nu must be numbers or arrays with one value per cell");
+    }
+    std::vector<Material> mats(per_cell ? v.m : 1);
+    for (size_t c = 0; c < mats.size(); ++c) {
+      mats[c] = Material{E.data()[c], nu.data()[c]};
+      mats[c].validate();
+    }
     return dispatch_cell(v.type, [&](auto T) -> py::object {
       constexpr CellType t = decltype(T)::value;
       auto A = std::make_shared<BlockMatrix<Element<t>::dim>>();
       {
         py::gil_scoped_release r;
-        *A = assemble_elasticity<t>(v.X, v.n, v.C, v.m, mat);
+        *A = assemble_elasticity<t>(v.X, v.n, v.C, v.m, CellMaterials{mats.data(), per_cell ? 1 : 0});
       }
       return py::cast(A);
     });

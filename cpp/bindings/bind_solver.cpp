@@ -97,6 +97,18 @@ void bind_dim(py::module_& m) {
            py::arg("rows"), py::arg("cols"), py::arg("indptr"), py::arg("indices"), py::arg("data"),
            "from block CSR arrays: rows, cols in blocks, data (nnz, d, d)")
       .def("memory_bytes", &BM::memory_bytes)
+      .def("add_diagonal_blocks", [](BM& A, DArr blocks) {
+        // e.g. the lumped stiffness of elastic supports (springs on boundary facets)
+        require_shape(blocks, "blocks", {(py::ssize_t)A.rows, d, d});
+        for (py::ssize_t i = 0; i < blocks.size(); ++i)
+          if (!std::isfinite(blocks.data()[i])) throw InputError("a diagonal block has a non-finite entry");
+        for (Index i = 0; i < A.rows; ++i) {
+          const Index pos = A.find(i, i);
+          if (pos < 0) throw InputError("row " + std::to_string(i) + " has no diagonal block");
+          for (int a = 0; a < d; ++a)
+            for (int b = 0; b < d; ++b) A.block(pos)(a, b) += blocks.data()[(i * d + a) * d + b];
+        }
+      }, py::arg("blocks"), "add blocks (rows, d, d) to the diagonal blocks")
       .def("matvec", [](const BM& A, DArr x) {
         require_shape(x, "x", {(py::ssize_t)A.cols, d});
         py::array_t<double> y({(py::ssize_t)A.rows, (py::ssize_t)d});

@@ -101,18 +101,26 @@ BlockMatrix<d> pattern_of_cells(Index n, const Index* cells, Index m, int k) {
   return A;
 }
 
+// The material of every cell: one for all (stride 0) or one per cell (stride 1), e.g. a body of
+// several regions.
+struct CellMaterials {
+  const Material* materials;
+  Index stride;
+  const Material& operator[](Index c) const { return materials[c * stride]; }
+};
+
 template <CellType T>
 BlockMatrix<Element<T>::dim> assemble_elasticity(const double* points, Index n_points, const Index* cells, Index n_cells,
-                                                 const Material& mat) {
+                                                 const CellMaterials& materials) {
   using E = Element<T>;
   constexpr int d = E::dim, k = E::nodes;
-  mat.validate();
-  const double lam = mat.lambda(), mu = mat.mu();
+  for (Index c = 0; c < (materials.stride ? n_cells : 1); ++c) materials[c].validate();
   BlockMatrix<d> A = pattern_of_cells<d>(n_points, cells, n_cells, k);
   CellGeometry<T> geo;
   double X[k * d];
   Eigen::Matrix<double, k * d, k * d> K;
   for (Index c = 0; c < n_cells; ++c) {
+    const double lam = materials[c].lambda(), mu = materials[c].mu();
     const Index* cell = cells + c * k;
     gather<T>(points, cell, X);
     K.setZero();
@@ -138,6 +146,12 @@ BlockMatrix<Element<T>::dim> assemble_elasticity(const double* points, Index n_p
       }
   }
   return A;
+}
+
+template <CellType T>
+BlockMatrix<Element<T>::dim> assemble_elasticity(const double* points, Index n_points, const Index* cells, Index n_cells,
+                                                 const Material& mat) {
+  return assemble_elasticity<T>(points, n_points, cells, n_cells, CellMaterials{&mat, 0});
 }
 
 // Consistent load of a field given by its nodal values (interpolated with the same basis):
