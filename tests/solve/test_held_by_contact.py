@@ -115,3 +115,40 @@ def test_a_free_piece_that_touches_nothing_is_refused():
         cm.Problem(cm.Body(h, MAT, [], contact_tags=B, pressure={T: 1.0}), obstacle=FLOOR, friction=cm.Coulomb(0.3))
     with pytest.raises(ValueError, match=r"leave rigid-body motion free.*\(or let an obstacle hold it\)"):
         cm.Problem(cm.Body(_block(2), MAT, [cm.Dirichlet(L, (0.0, None))]))
+
+
+def _stack(levels, count, cell="quad"):
+    """`count` blocks stacked on a rigid floor, each narrower than the one below, none supported:
+    the top one pressed by a pressure, each held by the one below and the lowest by the floor."""
+    bodies, contacts = [], []
+    for k in range(count):
+        width = 2.0 - 0.5 * k
+        mesh = cm.rectangle(4 - k, 2, width, 1.0, cell=cell, origin=(0.25 * k, float(k)))
+        bodies.append(cm.Body(cm.MeshHierarchy.build(mesh, levels), MAT, [],
+                              pressure={T: 1.0} if k == count - 1 else None))
+    for k in range(1, count):
+        contacts.append(cm.ContactPair(k, k - 1, [B], [T], search=0.1))
+    contacts.append(cm.ObstacleContact(0, B, FLOOR))
+    return bodies, contacts
+
+
+@pytest.mark.parametrize("count", [2, 3])
+def test_a_stack_of_unsupported_blocks(count):
+    """Several bodies with several pairs and no supports at all: every contact carries the top's
+    load to round-off."""
+    bodies, contacts = _stack(4, count)
+    p = cm.Problem(bodies, contacts=contacts, friction=cm.Coulomb(0.3))
+    res = p.solve()
+    assert res.converged, res.status
+    assert contact_conditions(p, res)["max"] < 1e-6
+    load = 1.0 * (2.0 - 0.5 * (count - 1))   # the pressure on the top block's width
+    for name, force in res.contact_forces().items():
+        assert force[1] == pytest.approx(load, rel=1e-10), name
+        assert abs(force[0]) <= 1e-10 * load
+
+
+def test_a_body_of_several_pulled_off_is_refused_by_number():
+    bodies, contacts = _stack(2, 2)
+    bodies[1].pressure = {T: -1.0}
+    with pytest.raises(ValueError, match=r"nothing holds body 1 in a translation along \[0.0, 1.0\]"):
+        cm.Problem(bodies, contacts=contacts, friction=cm.Coulomb(0.3))

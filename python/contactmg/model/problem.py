@@ -30,7 +30,7 @@ from .frames import contact_frames
 from .friction import Coulomb, Frictionless, Tresca
 from .loads import PointLoad, VectorField, assemble_load, field_values, spring_blocks, tag_tuple
 from .material import Material, Materials, check_materials, core_moduli
-from .rigid_motion import check_held_by_contact, free_modes
+from .rigid_motion import FreeMotion, check_held, check_held_by_contact, free_modes
 
 if TYPE_CHECKING:
     from .mortar import MortarCoupling
@@ -198,7 +198,7 @@ class Problem:
     default_options = None
 
     def __init__(self, bodies, obstacle=None, friction=None, pairs=None, tied_correction: bool = True,
-                 contacts=None):
+                 contacts=None, *, _part_of_many: bool = False):
         t0 = time.perf_counter()
         single = isinstance(bodies, Body)
         bodies = [bodies] if single else bodies
@@ -222,7 +222,7 @@ class Problem:
                 raise ValueError("pairs couple two bodies of the problem: give several bodies")
             self.pairs: List[ContactPair] = []
             self.tied_correction = False
-            self._init_one(bodies[0], obstacle)
+            self._init_one(bodies[0], obstacle, _part_of_many)
         else:
             if not pairs:
                 raise TypeError("several bodies need pairs: a ContactPair or a non-empty sequence of ContactPair")
@@ -231,7 +231,7 @@ class Problem:
         self.assembly_seconds = time.perf_counter() - t0 + sum(b.hierarchy.build_seconds for b in bodies)
 
     # -- one body ---------------------------------------------------------------------------------
-    def _init_one(self, b: Body, obstacle) -> None:
+    def _init_one(self, b: Body, obstacle, part_of_many: bool = False) -> None:
         self.hierarchy, self.material, self.obstacle = b.hierarchy, b.material, obstacle
         mesh = self.mesh = b.hierarchy.finest
         self.springs = b.springs or {}
@@ -242,10 +242,13 @@ class Problem:
         # the setters clear these)
         self._load_recipe, self._values_recipe = (b.body_force, b.traction, b.pressure, b.point_loads, b.gravity,
                                                   b.material), list(b.dirichlet)
-        floating = self._check_rigid_motion(held_by_contact=bool(self.obstacle_contacts))
+        # a body of several may be held by its pairs: the problem of all of them decides (_init_many)
+        floating = self._check_rigid_motion(held_by_contact=bool(self.obstacle_contacts) or part_of_many)
+        self.floating = floating
         self.contact, self.contact_source = self._obstacle_boundary(self.obstacle_contacts)
         self.coefficients = friction_coefficients(self.friction, self.contact)
-        self._check_held_by_contact(floating)
+        if not part_of_many:
+            self._check_held_by_contact(floating)
         self.body_id = np.zeros(mesh.num_points, np.int32)
         self.transfers = list(b.hierarchy.transfers)
 
@@ -262,10 +265,18 @@ class Problem:
         if len(dims) != 1:
             raise ValueError(f"the bodies need one dimension, got {sorted(dims)}")
         self.pairs, self.obstacle = pairs, None
-        # each body on its own: assembly, Dirichlet data, its rigid motions held (no contact relied on)
-        self.parts = [Problem(Body(b.hierarchy, b.material, b.dirichlet, body_force=b.body_force,
-                                   traction=b.traction, pressure=b.pressure, springs=b.springs,
-                                   point_loads=b.point_loads, gravity=b.gravity)) for b in bodies]
+        # each body on its own: assembly, Dirichlet data; its rigid motions held by its supports, or
+        # left to its contacts if it has any (checked for all bodies together below)
+        touching = {k for q in pairs for k in (q.nonmortar, q.mortar)} | {oc.body for oc in self.obstacle_contacts}
+        self.parts = []
+        for k, b in enumerate(bodies):
+            try:
+                self.parts.append(Problem(Body(b.hierarchy, b.material, b.dirichlet, body_force=b.body_force,
+                                               traction=b.traction, pressure=b.pressure, springs=b.springs,
+                                               point_loads=b.point_loads, gravity=b.gravity),
+                                          _part_of_many=k in touching))
+            except ValueError as e:
+                raise ValueError(f"body {k}: {e}") from None
         d = dims.pop()
         sizes = [p.mesh.num_points for p in self.parts]
         self.offsets = np.r_[0, np.cumsum(sizes)].astype(np.int64)
@@ -313,6 +324,7 @@ class Problem:
                                        else contact_frames(normals))
         self.coefficients = friction_coefficients(self.friction, self.contact)
         self.transfers = self._transfers()
+        self._check_bodies_held()
 
     @property
     def multibody(self) -> bool:
@@ -357,6 +369,36 @@ class Problem:
                              f"{where} free: fix enough displacement components to hold " +
                              ("the body" if count == 1 else "every piece") + " (or let an obstacle hold it)")
         return floating
+
+    def _check_bodies_held(self) -> None:
+        """Several bodies: the free rigid motions of every body left to its contacts must be held
+        by them, the pairs passing forces between bodies (model/rigid_motion.py)."""
+        motions, work, index = [], [], {}
+        for k, part in enumerate(self.parts):
+            for nodes, modes, piece, count in part.floating:
+                name = f"body {k}" if count == 1 else f"piece {piece + 1} of the {count} pieces of body {k}"
+                index[(k, piece)] = len(motions)
+                motion = FreeMotion(part.mesh.points[nodes], modes, name)
+                motions.append(motion)
+                work.append(np.einsum("mdk,md->k", motion.at(part.mesh.points[nodes]), part.load[nodes]))
+        if not motions:
+            return
+        piece_of = [part._pieces()[1] for part in self.parts]
+        c = self.contact
+        body = self.body_id[c.nodes]
+        local = c.nodes - self.offsets[body]
+        pushed = np.array([index.get((int(b), int(piece_of[b][i])), -1) for b, i in zip(body, local)], int)
+        pulled = np.full(len(c.nodes), -1)
+        for k, q in enumerate(self.pairs):
+            sel = self.contact_source == k
+            # the piece of the mortar body that holds the mortar side of the pair
+            labels = piece_of[q.mortar][np.unique(self.couplings[k].M.tocsr().indices)]
+            piece = int(np.bincount(np.asarray(labels)).argmax())
+            pulled[sel] = index.get((q.mortar, piece), -1)
+        x = self.mesh.points[c.nodes]
+        contacts = [(x[[i]], c.normals[[i]], c.frames[[i]], self.coefficients[[i]], pushed[i], pulled[i])
+                    for i in range(len(c.nodes)) if pushed[i] >= 0 or pulled[i] >= 0]
+        check_held(motions, work, contacts, self.law)
 
     def _check_held_by_contact(self, floating: list) -> None:
         """Every piece whose supports leave rigid motions free must touch an obstacle that can hold

@@ -17,11 +17,11 @@ from typing import Optional
 import numpy as np
 
 
-def _base_modes(x: np.ndarray) -> np.ndarray:
-    """The rigid motions of points `x` (m, d) about their centroid: (m, d, d) translations, then
-    rotations (2D: about z; 3D: about x, y, z): (m, d, nmodes)."""
+def _base_modes(x: np.ndarray, centre: Optional[np.ndarray] = None) -> np.ndarray:
+    """The rigid motions of points `x` (m, d) about `centre` (None: their centroid): translations,
+    then rotations (2D: about z; 3D: about x, y, z): (m, d, nmodes)."""
     m, d = x.shape
-    y = x - x.mean(axis=0)
+    y = x - (x.mean(axis=0) if centre is None else centre)
     modes = [np.broadcast_to(np.eye(d)[a], (m, d)) for a in range(d)]
     if d == 2:
         modes.append(np.c_[-y[:, 1], y[:, 0]])
@@ -90,55 +90,92 @@ def _generators(normals: np.ndarray, frames: np.ndarray, law: str, coefficients:
     return out
 
 
-def check_held_by_contact(x: np.ndarray, modes: np.ndarray, load: np.ndarray, contact_rows: np.ndarray,
-                          normals: np.ndarray, frames: np.ndarray, law: str, coefficients: np.ndarray,
-                          where: str) -> None:
-    """Raise a ValueError naming the free rigid motion (of the piece with points `x`, free modes
-    `modes` (nmodes, k)) that the contacts (rows `contact_rows` of `x`, with their normals, frames,
-    law and coefficients) cannot hold under `load` (m, d) -- or could hold but leave undetermined
-    (frictionless contact along a motion that moves no contact node along its normal)."""
+class FreeMotion:
+    """The free rigid motions of one piece (of one body): its points, their centroid, the basis
+    `modes` (nmodes, k) and the piece's name in messages."""
+
+    def __init__(self, x: np.ndarray, modes: np.ndarray, name: str):
+        self.x, self.centre, self.modes, self.name = x, x.mean(axis=0), modes, name
+
+    def at(self, points: np.ndarray) -> np.ndarray:
+        """The free motions at `points` (m, d): (m, d, k)."""
+        return _base_modes(points, self.centre) @ self.modes
+
+    def describe(self, c: np.ndarray) -> str:
+        """The piece and the motion of coefficients `c` (k,) in its free modes, in words."""
+        return f"{self.name} in {describe(self.x, self.modes @ c)}"
+
+
+def check_held(motions: list, load_work: list, contacts: list, law: str) -> None:
+    """Raise a ValueError naming a free rigid motion that the contacts cannot hold, or leave
+    undetermined. `motions`: FreeMotion per piece; `load_work`: per piece the load's work on each of
+    its free motions (k,); `contacts`: (points (nc, d), normals (nc, d), frames (nc, d, d),
+    coefficients (nc,), pushed, pulled) with `pushed` the index into `motions` of the piece the
+    force -lambda n acts on (or -1: a held body) and `pulled` the piece that feels the opposite force
+    (the other body of a pair; -1: an obstacle or a held body)."""
     from scipy.optimize import nnls
 
-    base = _base_modes(x)                                  # (m, d, nmodes)
-    M = base @ modes                                        # (m, d, k): the free motions
-    k = M.shape[2]
-    f = np.einsum("mdk,md->k", M, load)                     # the load's work on each free motion
-    gens = _generators(normals, frames, law, coefficients)
-    cols = [np.einsum("dk,d->k", M[row], g) for row, gs in zip(contact_rows, gens) for g in gs]
-    G = np.array(cols).T if cols else np.zeros((k, 0))
-    Mc = M[contact_rows]                                    # (nc, d, k)
-    normal_motion = np.einsum("cdk,cd->ck", Mc, normals)
-    scale = max(float(np.abs(normal_motion).max(initial=0.0)), 1e-300)
+    sizes = [m.modes.shape[1] for m in motions]
+    offsets = np.r_[0, np.cumsum(sizes)].astype(int)
+    K = int(offsets[-1])
+    f = np.concatenate(load_work) if load_work else np.zeros(0)
+    cols, normal_rows = [], []
+    for points, normals, frames, coefficients, pushed, pulled in contacts:
+        if len(points) == 0:
+            continue
+        U = np.zeros((len(points), points.shape[1], K))    # the relative motion (pushed - pulled) at the nodes
+        if pushed >= 0:
+            U[:, :, offsets[pushed]:offsets[pushed + 1]] += motions[pushed].at(points)
+        if pulled >= 0:
+            U[:, :, offsets[pulled]:offsets[pulled + 1]] -= motions[pulled].at(points)
+        normal_rows.append(np.einsum("cdk,cd->ck", U, normals))
+        for i, gens in enumerate(_generators(normals, frames, law, coefficients)):
+            cols += [U[i].T @ g for g in gens]
+
+    def name(c):
+        j = int(np.argmax([np.linalg.norm(c[offsets[a]:offsets[a + 1]]) for a in range(len(motions))]))
+        return motions[j].describe(c[offsets[j]:offsets[j + 1]])
+
+    G = np.array(cols).T if cols else np.zeros((K, 0))
+    normal_motion = np.vstack(normal_rows) if normal_rows else np.zeros((0, K))
     # a free motion that moves no contact node along its normal: only friction can fix it
-    _, s, vt = np.linalg.svd(normal_motion / scale, full_matrices=True)
-    rank = int(np.sum(s > 1e-8))
-    if rank < k and law == "frictionless":
-        c = modes @ vt[rank]
-        raise ValueError(f"nothing holds {where} in {describe(x, c)}: its supports leave that motion free and "
-                         "frictionless contact exerts no force along it (hold it by a Dirichlet condition or a "
-                         "spring, or give friction)")
+    if law == "frictionless":
+        scale = max(float(np.abs(normal_motion).max(initial=0.0)), 1e-300)
+        _, sv, vt = np.linalg.svd(normal_motion / scale if len(normal_motion) else np.zeros((1, K)), full_matrices=True)
+        rank = int(np.sum(sv > 1e-8))
+        if rank < K:
+            raise ValueError(f"nothing holds {name(vt[rank])}: its supports leave that motion free and frictionless "
+                             "contact exerts no force along it (hold it by a Dirichlet condition or a spring, or give "
+                             "friction)")
     fnorm = float(np.linalg.norm(f))
     gscale = np.linalg.norm(G, axis=0)
     Gs = G / np.where(gscale > 0, gscale, 1.0)
-    target = -f / fnorm if fnorm > 0 else np.zeros(k)
+    target = -f / fnorm if fnorm > 0 else np.zeros(K)
     weights, residual = nnls(Gs, target) if G.shape[1] else (np.zeros(0), float(np.linalg.norm(target)))
     if residual > 1e-6:
-        unbalanced = Gs @ weights - target
-        c = modes @ unbalanced
-        raise ValueError(f"nothing holds {where} in {describe(x, c)}: the load pushes it that way and its contacts "
+        raise ValueError(f"nothing holds {name(Gs @ weights - target)}: the load pushes it that way and its contacts "
                          "cannot push back (the load moves it away from every obstacle, or beyond what friction "
                          "holds); hold it by a Dirichlet condition or a spring, or check the load's direction")
     # Unique only if the contacts' forces balance the load with room to spare in every direction of
     # the free motions (the load inside the cone of the contact forces, not on its edge): else some
     # motion -- lifting off, rolling -- changes nothing, and the body may take it by any amount.
     delta = 1e-4
-    for a in range(k):
+    for a in range(K):
         for sign in (1.0, -1.0):
-            shifted = target + sign * delta * np.eye(k)[a]
-            _, r = nnls(Gs, shifted) if G.shape[1] else (None, float(np.linalg.norm(shifted)))
+            shifted = target + sign * delta * np.eye(K)[a]
+            r = nnls(Gs, shifted)[1] if G.shape[1] else float(np.linalg.norm(shifted))
             if r > 1e-3 * delta:
-                c = modes @ (-sign * np.eye(k)[a])
-                raise ValueError(f"nothing holds {where} in {describe(x, c)}: its supports leave that motion free and "
-                                 "the load does not press it onto its obstacles that way, so it may take that motion "
-                                 "(lift off, tip or slide) by any amount; hold it by a Dirichlet condition or a "
-                                 "spring, or press it onto the obstacle")
+                raise ValueError(f"nothing holds {name(-sign * np.eye(K)[a])}: its supports leave that motion free "
+                                 "and the load does not press it onto its obstacles that way, so it may take that "
+                                 "motion (lift off, tip or slide) by any amount; hold it by a Dirichlet condition or "
+                                 "a spring, or press it onto the obstacle")
+
+
+def check_held_by_contact(x: np.ndarray, modes: np.ndarray, load: np.ndarray, contact_rows: np.ndarray,
+                          normals: np.ndarray, frames: np.ndarray, law: str, coefficients: np.ndarray,
+                          where: str) -> None:
+    """check_held for one piece (points `x`, free modes `modes`) against rigid obstacles at its
+    points `contact_rows` under `load` (m, d)."""
+    motion = FreeMotion(x, modes, where)
+    work = np.einsum("mdk,md->k", motion.at(x), load)
+    check_held([motion], [work], [(x[contact_rows], normals, frames, coefficients, 0, -1)], law)
