@@ -6,7 +6,9 @@ dotted form of the file (`body[0].dirichlet[1].tags`) and what is wrong; an unkn
 with the closest known name where one is close. Paths in the file are relative to its folder."""
 from __future__ import annotations
 
+import contextlib
 import difflib
+import io
 import math
 import os
 from dataclasses import dataclass, field
@@ -226,6 +228,10 @@ def _kind(v) -> str:
 
 def _close(word: str, known) -> str:
     match = difflib.get_close_matches(str(word), list(known), n=1, cutoff=0.6)
+    if not match:  # an abbreviation or a spelled-out name ("tolerance" for "tol")
+        w = str(word).lower()
+        match = sorted((k for k in known if len(k) >= 3 and (w.startswith(k.lower()) or k.lower().startswith(w))
+                        and len(w) >= 3), key=len, reverse=True)
     return f" (did you mean {match[0]!r}?)" if match else ""
 
 
@@ -312,7 +318,9 @@ def _read_body(t: _Table, base: str):
     name = t.string("name", required=True)
     mesh_file = t.string("mesh", required=True)
     try:
-        mesh = read_mesh(_path(base, mesh_file))
+        # meshio's Gmsh reader prints an empty line: a report on standard output (--json -) stays clean
+        with contextlib.redirect_stdout(io.StringIO()):
+            mesh = read_mesh(_path(base, mesh_file))
     except ValueError as e:
         raise t.error("mesh", str(e)) from None
     levels = t.integer("levels", 1, 1, MAX_LEVELS)
