@@ -333,7 +333,10 @@ def _refined(m: Mesh, r: dict, projector: Optional[Projector]) -> Tuple[Mesh, Tr
     # 32-bit ids where they fit: the core reads any integer array (a 64-bit copy while it
     # works on it, none kept); the Python side keeps half the bytes
     ids = index_dtype(len(points))
-    fine = Mesh._trusted(points, r["cells"].astype(ids), m.cell_type, r["facets"].astype(ids), r["facet_tags"])
+    # uniform refinement writes the children of each cell one after another: they inherit its region
+    children = len(r["cells"]) // m.num_cells
+    fine = Mesh._trusted(points, r["cells"].astype(ids), m.cell_type, r["facets"].astype(ids), r["facet_tags"],
+                         np.repeat(m.cell_tags, children))
     ptr = r["ptr"].astype(index_dtype(int(r["ptr"][-1])))
     return fine, Transfer(fine.num_points, m.num_points, ptr, r["parent"].astype(index_dtype(m.num_points)), r["weight"])
 

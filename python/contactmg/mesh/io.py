@@ -58,7 +58,9 @@ def read_mesh(source: Union[str, os.PathLike, meshio.Mesh], dim: Optional[int] =
                              f"the mesh extent is {extent:.3g})")
         pts = pts[:, :d]
     cells = np.vstack([b.data for b in m.cells if b.type == cell_type]).astype(np.int64)
-    tmp = Mesh(pts, cells, cell_type, np.zeros((0, FACET_NODES[cell_type]), np.int64), np.zeros(0, np.int64))
+    cell_tags = _cell_tags(m, cell_type)
+    tmp = Mesh(pts, cells, cell_type, np.zeros((0, FACET_NODES[cell_type]), np.int64), np.zeros(0, np.int64),
+               cell_tags)
     facets = boundary_facets(tmp.cells, cell_type)
     tags = np.zeros(len(facets), np.int64)
     ftype = _FACET_TYPE[cell_type]
@@ -77,7 +79,17 @@ def read_mesh(source: Union[str, os.PathLike, meshio.Mesh], dim: Optional[int] =
                     tags[i] = int(t)
         break
     # the cells are checked and the facets are the boundary facets by construction
-    return Mesh._trusted(tmp.points, tmp.cells, cell_type, facets, tags)
+    return Mesh._trusted(tmp.points, tmp.cells, cell_type, facets, tags, tmp.cell_tags)
+
+
+def _cell_tags(m: meshio.Mesh, cell_type: str) -> Optional[np.ndarray]:
+    """The region tag of every cell of type `cell_type` (gmsh's physical tag of its volume or
+    surface; None where the file gives none)."""
+    for key in _TAG_KEYS:
+        if key in m.cell_data:
+            data = [np.asarray(d) for b, d in zip(m.cells, m.cell_data[key]) if b.type == cell_type]
+            return np.concatenate(data) if data else None
+    return None
 
 
 def _pad(v: np.ndarray) -> np.ndarray:
@@ -94,7 +106,7 @@ def to_meshio(mesh: Mesh, point_data: Optional[Dict[str, np.ndarray]] = None,
     pts = _pad(mesh.points)
     blocks = [(mesh.cell_type, mesh.cells), (_FACET_TYPE[mesh.cell_type], mesh.facets)]
     pd = {k: _pad(v) for k, v in (point_data or {}).items()}
-    cd = {"gmsh:physical": [np.zeros(mesh.num_cells, np.int64), mesh.facet_tags]}
+    cd = {"gmsh:physical": [np.asarray(mesh.cell_tags, np.int64), mesh.facet_tags]}
     for k, v in (cell_data or {}).items():
         v = np.asarray(v)
         if len(v) != mesh.num_cells:

@@ -221,20 +221,20 @@ def boundary_facets(cells: np.ndarray, cell_type: str) -> np.ndarray:
     return np.ascontiguousarray(all_f[counts[inverse.ravel()] == 1])
 
 
-def _integer_tags(tags, count: int) -> np.ndarray:
-    """Facet tags as int64; floats are accepted only when they hold integers (NaN is no tag)."""
+def _integer_tags(tags, count: int, what: str = "facet") -> np.ndarray:
+    """Facet (or cell) tags as int64; floats are accepted only when they hold integers (NaN is no tag)."""
     tags = np.asarray(tags)
     if tags.shape != (count,):
-        raise ValueError(f"facet_tags must have shape ({count},), got {tags.shape}")
+        raise ValueError(f"{what}_tags must have shape ({count},), got {tags.shape}")
     if count == 0:
         return np.zeros(0, np.int64)
     if tags.dtype.kind == "b" or not (np.issubdtype(tags.dtype, np.integer) or np.issubdtype(tags.dtype, np.floating)):
-        raise ValueError(f"facet_tags must be integers, got dtype {tags.dtype}")
+        raise ValueError(f"{what}_tags must be integers, got dtype {tags.dtype}")
     if np.issubdtype(tags.dtype, np.floating):
         bad = ~np.isfinite(tags) | (tags != np.round(tags)) | (np.abs(tags) >= 2.0 ** 63)
         if np.any(bad):
             i = int(np.argmax(bad))
-            raise ValueError(f"facet tag {i} is {tags[i]!r}: facet tags must be integers")
+            raise ValueError(f"{what} tag {i} is {tags[i]!r}: {what} tags must be integers")
     return tags.astype(np.int64)
 
 
@@ -271,6 +271,9 @@ class Mesh:
     cell_type: str
     facets: np.ndarray
     facet_tags: np.ndarray
+    # the region of each cell (gmsh's physical volume or surface tag; 0 where none is given):
+    # materials are assigned per region
+    cell_tags: Optional[np.ndarray] = None
 
     def __post_init__(self):
         if self.cell_type not in CELL_NODES:
@@ -319,6 +322,7 @@ class Mesh:
         self.cells = np.ascontiguousarray(cells)
         self.facets = np.ascontiguousarray(facets)
         self.facet_tags = np.ascontiguousarray(tags)
+        self.cell_tags = np.zeros(len(cells), np.int64) if self.cell_tags is None else _integer_tags(self.cell_tags, len(cells), "cell")
 
     def _orient(self, pts, cells):
         _check_manifold(cells, self.cell_type)
@@ -365,12 +369,13 @@ class Mesh:
 
     # -- construction ---------------------------------------------------------------------------
     @classmethod
-    def _trusted(cls, points, cells, cell_type, facets, facet_tags) -> "Mesh":
+    def _trusted(cls, points, cells, cell_type, facets, facet_tags, cell_tags=None) -> "Mesh":
         """A mesh whose arrays are known valid: refined by the core, whose cells the core has
         checked (positive Jacobians), or cells validated here with facets made by
         boundary_facets. Skips the Python validation, which costs seconds on million-node levels."""
         m = object.__new__(cls)
         m.points, m.cells, m.cell_type, m.facets, m.facet_tags = points, cells, cell_type, facets, facet_tags
+        m.cell_tags = np.zeros(len(cells), np.int32) if cell_tags is None else cell_tags
         return m
 
     @classmethod
@@ -443,4 +448,5 @@ class Mesh:
 
     def copy(self) -> "Mesh":
         """An independent copy of the mesh."""
-        return Mesh(self.points.copy(), self.cells.copy(), self.cell_type, self.facets.copy(), self.facet_tags.copy())
+        return Mesh(self.points.copy(), self.cells.copy(), self.cell_type, self.facets.copy(), self.facet_tags.copy(),
+                    self.cell_tags.copy())

@@ -28,30 +28,11 @@ from ..mesh.hierarchy import MeshHierarchy, Transfer
 from ..mesh.mesh import Mesh, connected_components
 from .frames import contact_frames
 from .friction import Coulomb, Frictionless, Tresca
-from .material import Material
+from .loads import PointLoad, VectorField, assemble_load, field_values, spring_blocks, tag_tuple
+from .material import Material, Materials, check_materials, core_moduli
 
 if TYPE_CHECKING:
     from .mortar import MortarCoupling
-
-VectorField = Union[Sequence[float], np.ndarray, Callable[[np.ndarray], np.ndarray]]
-
-def tag_tuple(tags, name: str) -> tuple:
-    """Facet tags as a tuple of ints: one integer, or a sequence of integers."""
-    if isinstance(tags, (bool, np.bool_)) or isinstance(tags, (str, bytes)):
-        raise TypeError(f"{name} must be an integer tag or a sequence of integer tags, got {tags!r}")
-    if isinstance(tags, (int, np.integer)):
-        return (int(tags),)
-    try:
-        items = list(tags)
-    except TypeError:
-        raise TypeError(f"{name} must be an integer tag or a sequence of integer tags, got {tags!r}") from None
-    out = []
-    for t in items:
-        if isinstance(t, (bool, np.bool_)) or not isinstance(t, (int, np.integer)):
-            raise TypeError(f"{name} must hold integer tags, got {t!r}")
-        out.append(int(t))
-    return tuple(out)
-
 
 @dataclass(frozen=True)
 class Dirichlet:
@@ -84,33 +65,6 @@ class ContactBoundary:
             self.frames = contact_frames(self.normals)
 
 
-def _field(value: Optional[VectorField], x: np.ndarray, name: str) -> np.ndarray:
-    d = x.shape[1]
-    if value is None:
-        return np.zeros((len(x), d))
-    v = value(x) if callable(value) else np.broadcast_to(np.asarray(value, dtype=float), (len(x), d))
-    v = np.asarray(v, dtype=float)
-    if v.shape != (len(x), d):
-        raise ValueError(f"{name} must give {d} components per point, got shape {v.shape}")
-    if not np.all(np.isfinite(v)):
-        raise ValueError(f"{name} has non-finite values")
-    return np.ascontiguousarray(v)
-
-
-def assemble_load(mesh, body_force: Optional[VectorField] = None,
-                  traction: Optional[Dict[int, VectorField]] = None) -> np.ndarray:
-    """The nodal load (n, d): body force and Neumann tractions on tagged facets (a load path
-    assembles one per step)."""
-    load = _core.assemble_mass_load(mesh.points, mesh.cells, mesh.cell_type, _field(body_force, mesh.points, "body_force"))
-    for tag, value in (traction or {}).items():
-        (tag,) = tag_tuple(tag, "a traction tag")
-        sel = mesh.facet_tags == tag
-        if not np.any(sel):
-            raise ValueError(f"no boundary facet carries the traction tag {tag}")
-        load += _core.assemble_facet_load(mesh.points, mesh.facets[sel], _field(value, mesh.points, f"traction[{tag}]"))
-    return load
-
-
 def dirichlet_arrays(mesh, dirichlet: Sequence[Dirichlet]):
     """(fixed (n, d) uint8, fixed_values (n, d)) of a sequence of Dirichlet conditions."""
     d, n = mesh.dim, mesh.num_points
@@ -122,7 +76,7 @@ def dirichlet_arrays(mesh, dirichlet: Sequence[Dirichlet]):
             raise ValueError(f"no boundary facet carries the Dirichlet tags {list(bc.tags)}")
         if callable(bc.value):
             fixed[nodes] = 1
-            values[nodes] = _field(bc.value, mesh.points[nodes], "Dirichlet value")
+            values[nodes] = field_values(bc.value, mesh.points[nodes], "Dirichlet value")
             continue
         if len(bc.value) != d:
             raise ValueError(f"a Dirichlet value needs {d} components (None for free), got {len(bc.value)}")
@@ -139,22 +93,36 @@ def dirichlet_arrays(mesh, dirichlet: Sequence[Dirichlet]):
 
 @dataclass
 class Body:
-    """One elastic body: its mesh hierarchy, material, Dirichlet data (a sequence of Dirichlet),
-    the facet tags that may touch the problem's rigid obstacle (`contact_tags`), a body force and
-    Neumann tractions ({tag: vector or callable(x)})."""
+    """One elastic body: its mesh hierarchy; its material (a Material, or {region tag: Material}
+    for a mesh of several regions, the cell tags of read_mesh); Dirichlet data (a sequence of
+    Dirichlet); the facet tags that may touch the problem's rigid obstacle (`contact_tags`); loads:
+    a body force per volume, gravity (an acceleration vector; the materials give the density),
+    tractions {tag: vector or callable(x)}, normal pressures {tag: p} (p > 0 pushes into the body),
+    point loads (PointLoad); and elastic supports {tag: stiffness per unit area} (a number, or one
+    per global axis)."""
 
     hierarchy: MeshHierarchy
-    material: Material
+    material: Materials
     dirichlet: Sequence[Dirichlet] = ()
     contact_tags: Sequence[int] = ()
     body_force: Optional[VectorField] = None
     traction: Optional[Dict[int, VectorField]] = None
+    pressure: Optional[Dict[int, float]] = None
+    springs: Optional[Dict[int, Union[float, Sequence[float]]]] = None
+    point_loads: Sequence[PointLoad] = ()
+    gravity: Optional[Sequence[float]] = None
 
     def __post_init__(self):
         if not isinstance(self.hierarchy, MeshHierarchy):
             raise TypeError("hierarchy must be a MeshHierarchy")
-        if not isinstance(self.material, Material):
-            raise TypeError("material must be a Material")
+        if not isinstance(self.material, (Material, dict)):
+            raise TypeError("material must be a Material or a dict {region tag: Material}")
+        check_materials(self.hierarchy.finest, self.material)
+        for name in ("traction", "pressure", "springs"):
+            v = getattr(self, name)
+            if v is not None and not isinstance(v, dict):
+                raise TypeError(f"{name} must be a dict {{facet tag: value}}, got {type(v).__name__}")
+        self.point_loads = [self.point_loads] if isinstance(self.point_loads, PointLoad) else list(self.point_loads)
         dirichlet = [self.dirichlet] if isinstance(self.dirichlet, Dirichlet) else list(self.dirichlet)
         for bc in dirichlet:
             if not isinstance(bc, Dirichlet):
@@ -243,12 +211,14 @@ class Problem:
                             f"gaps_and_normals(points), got {type(obstacle).__name__}")
         self.hierarchy, self.material, self.obstacle = b.hierarchy, b.material, obstacle
         mesh = self.mesh = b.hierarchy.finest
-        self._A = _core.assemble_elasticity(mesh.points, mesh.cells, mesh.cell_type, b.material.E, b.material.nu)
-        self.load = assemble_load(mesh, b.body_force, b.traction)
+        self.springs = b.springs or {}
+        self._A = self._assemble_matrix()
+        self.load = assemble_load(mesh, b.body_force, b.traction, b.pressure, b.point_loads, b.gravity, b.material)
         self.fixed, self.fixed_values = dirichlet_arrays(mesh, b.dirichlet)
         # how to make load and fixed_values again once released (a value set from outside is kept:
         # the setters clear these)
-        self._load_recipe, self._values_recipe = (b.body_force, b.traction), list(b.dirichlet)
+        self._load_recipe, self._values_recipe = (b.body_force, b.traction, b.pressure, b.point_loads, b.gravity,
+                                                  b.material), list(b.dirichlet)
         self._check_rigid_motion()
         self.contact = self._contact_boundary(b.contact_tags, obstacle)
         self.coefficients = friction_coefficients(self.friction, self.contact)
@@ -275,7 +245,8 @@ class Problem:
         self.pairs, self.obstacle = pairs, None
         # each body on its own: assembly, Dirichlet data, its rigid motions held (no contact relied on)
         self.parts = [Problem(Body(b.hierarchy, b.material, b.dirichlet, body_force=b.body_force,
-                                   traction=b.traction)) for b in bodies]
+                                   traction=b.traction, pressure=b.pressure, springs=b.springs,
+                                   point_loads=b.point_loads, gravity=b.gravity)) for b in bodies]
         d = dims.pop()
         sizes = [p.mesh.num_points for p in self.parts]
         self.offsets = np.r_[0, np.cumsum(sizes)].astype(np.int64)
@@ -325,6 +296,9 @@ class Problem:
         mesh = self.mesh
         x, d = mesh.points, mesh.dim
         fixed = self.fixed.astype(bool)
+        if self.springs:  # an elastic support holds the directions it acts in
+            blocks = spring_blocks(mesh, self.springs)
+            fixed |= blocks[:, np.arange(d), np.arange(d)] > 0
         count, label = self._pieces()
         order = np.argsort(label, kind="stable")
         bounds = np.searchsorted(label[order], np.arange(count + 1))
@@ -335,8 +309,9 @@ class Problem:
             where = "" if count == 1 else (
                 f" of piece {k + 1} of the {count} disconnected pieces of the mesh ({len(nodes)} nodes, "
                 f"node {int(nodes[0])} at {np.round(x[nodes[0]], 6).tolist()})")
-            raise ValueError(f"the Dirichlet conditions leave rigid-body motion{where} free: "
-                             "fix enough displacement components to hold " + ("the body" if count == 1 else "every piece"))
+            raise ValueError(f"the Dirichlet conditions{' and springs' if self.springs else ''} leave rigid-body motion"
+                             f"{where} free: fix enough displacement components to hold " +
+                             ("the body" if count == 1 else "every piece"))
 
     def _pieces(self):
         """(count, label) of the connected pieces of the finest mesh, found on the coarsest mesh
@@ -471,7 +446,10 @@ class Problem:
         if self.multibody:
             return _block_matrix((self._Tk.T @ self.A_canonical @ self._Tk).tocsr(), self.mesh.dim)
         m = self.mesh
-        return _core.assemble_elasticity(m.points, m.cells, m.cell_type, self.material.E, self.material.nu)
+        A = _core.assemble_elasticity(m.points, m.cells, m.cell_type, *core_moduli(m, self.material))
+        if self.springs:
+            A.add_diagonal_blocks(spring_blocks(m, self.springs))
+        return A
 
     def to_canonical(self, w: np.ndarray) -> np.ndarray:
         """The displacement u = T w of the problem's unknowns w (one body: w itself)."""
@@ -640,4 +618,5 @@ def _union_mesh(meshes: Sequence[Mesh], offsets: np.ndarray) -> Mesh:
     return Mesh._trusted(np.vstack([m.points for m in meshes]),
                          np.vstack([m.cells + o for m, o in zip(meshes, offsets)]), meshes[0].cell_type,
                          np.vstack([m.facets + o for m, o in zip(meshes, offsets)]),
-                         np.concatenate([m.facet_tags for m in meshes]))
+                         np.concatenate([m.facet_tags for m in meshes]),
+                         np.concatenate([m.cell_tags for m in meshes]))

@@ -234,11 +234,14 @@ def adaptive_hierarchy(mesh: Mesh, levels: int, problem_factory: Callable[[MeshH
         raise ValueError(f"theta must be a number in (0, 1], got {theta!r}")
     if not callable(problem_factory):
         raise TypeError("problem_factory must be a callable hierarchy -> Problem")
+    if len(np.unique(mesh.cell_tags)) > 1:
+        raise ValueError("adaptive refinement keeps no regions (cell tags): a mesh of several regions needs "
+                         "MeshHierarchy.build (uniform refinement)")
     t0 = time.perf_counter()
     _core.check_cells(mesh.points, mesh.cells, mesh.cell_type)
     if mesh.cell_type == "triangle":
         coarse = Mesh._trusted(mesh.points, longest_edge_first(mesh.points, mesh.cells), mesh.cell_type,
-                               mesh.facets, mesh.facet_tags)
+                               mesh.facets, mesh.facet_tags, mesh.cell_tags)
     else:  # the core marks the coarse tetrahedra itself (bisection_marks None)
         coarse = mesh
     h = MeshHierarchy([coarse], [], kind="adaptive")

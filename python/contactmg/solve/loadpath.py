@@ -19,7 +19,8 @@ from typing import Callable, List, Optional, Sequence
 
 import numpy as np
 
-from ..model.problem import Dirichlet, Problem, assemble_load, dirichlet_arrays
+from ..model.loads import assemble_load
+from ..model.problem import Dirichlet, Problem, dirichlet_arrays
 from .options import INT32_MAX, METHODS, for_method, options_from
 from .solver import Solver
 from ..results.result import SLIP, STICK, ContactResult
