@@ -272,3 +272,106 @@ def test_read_model_raises_model_error_with_its_parts(tmp_path):
         read_model(path)
     assert e.value.file == str(path) and e.value.key == "body[0].dirichlet[1].tags"
     assert isinstance(e.value, ValueError)
+
+
+# -- loads, supports and regions ----------------------------------------------------------------
+LOADED = """
+[[body]]
+name = "slab"
+mesh = "slab.msh"
+levels = 3
+materials = [ { region = 1, E = 1000.0, nu = 0.3, density = 1.0 },
+              { region = 2, E = 3000.0, nu = 0.2, density = 2.0 } ]
+gravity = [0.0, -9.81]
+[[body.dirichlet]]
+tags = [4]
+value = [0.0, "free"]
+[[body.pressure]]
+tags = [3]
+value = 2.0
+[[body.spring]]
+tags = [2]
+stiffness = [0.0, 50.0]
+[[body.point_load]]
+point = [1.0, 0.5]
+force = [0.1, -0.3]
+[[obstacle]]
+body = "slab"
+tags = 1
+type = "plane"
+point = [0.0, 0.0]
+normal = [0.0, -1.0]
+[output]
+json = "slab.json"
+vtu = "slab.vtu"
+"""
+
+
+def slab_mesh(tmp_path):
+    """The block 1 x 0.5 with two regions: cells below y = 0.25 region 1, above region 2."""
+    from contactmg.mesh.generators import rectangle
+    from contactmg.mesh.io import write_mesh
+
+    m = rectangle(4, 2, lx=1.0, ly=0.5)
+    m.cell_tags = np.where(m.points[m.cells].mean(axis=1)[:, 1] < 0.25, 1, 2).astype(np.int64)
+    write_mesh(tmp_path / "slab.msh", m)
+    return tmp_path / "slab.msh"
+
+
+def test_pressure_gravity_point_load_springs_and_regions(tmp_path, capsys):
+    """Frictionless contact: the obstacle's force is normal (y); statics in x and y with the loads
+    computed here from the file's numbers and the springs' force from the displacement."""
+    slab_mesh(tmp_path)
+    (tmp_path / "slab.toml").write_text(LOADED)
+    rc, _, err = run_main(capsys, tmp_path / "slab.toml", "-q")
+    assert rc == 0, err
+    rep = json.loads((tmp_path / "slab.json").read_text())
+    # pressure 2 on the top (length 1) pushes down; the point load; the weight of the two halves (0.25 each)
+    load = np.array([0.1, -2.0 * 1.0 - 0.3 - 9.81 * (1.0 * 0.25 + 2.0 * 0.25)])
+    assert rep["load"] == pytest.approx(load, rel=1e-12)
+    contact = np.asarray(rep["contact_forces"]["obstacle"])
+    (reaction,) = rep["reactions"]
+    vtu = meshio.read(tmp_path / "slab.vtu")
+    x, u = vtu.points[:, :2], vtu.point_data["displacement"][:, :2]
+    right = np.nonzero(np.abs(x[:, 0] - 1.0) < 1e-12)[0]
+    right = right[np.argsort(x[right, 1])]
+    h = np.diff(x[right, 1])
+    share = np.r_[h, 0.0] / 2 + np.r_[0.0, h] / 2  # each node's part of the edge (the lumped measure)
+    spring = np.array([0.0, -50.0 * np.sum(share * u[right, 1])])
+    balance = contact + np.asarray(reaction["force"]) + spring + load
+    assert np.abs(balance).max() <= 1e-10 * np.abs(load).max()
+    assert contact[0] == pytest.approx(0.0, abs=1e-12 * contact[1]) and contact[1] > 0
+    assert abs(spring[1]) > 1e-6  # the spring does carry load
+
+    from contactmg.model.loads import PointLoad
+    mesh = read_mesh(tmp_path / "slab.msh")
+    body = Body(MeshHierarchy.build(mesh, 3), {1: Material(1000.0, 0.3, 1.0), 2: Material(3000.0, 0.2, 2.0)},
+                [Dirichlet([4], (0.0, None))], contact_tags=[1], gravity=(0.0, -9.81), pressure={3: 2.0},
+                springs={2: (0.0, 50.0)}, point_loads=[PointLoad((1.0, 0.5), (0.1, -0.3))])
+    res = Problem(body, obstacle=PlaneObstacle((0.0, 0.0), (0.0, -1.0))).solve("nmg")
+    assert res.cycles == rep["cycles"]
+    assert np.abs(u - res.displacement).max() <= 1e-14
+
+
+@pytest.mark.parametrize("old,new,key,words", [
+    (", density = 2.0 }", " }", "body[0].gravity", ["density", "every region"]),
+    ("{ region = 2,", "{ region = 5,", "body[0].materials[1].region", ["no cell carries the region tag 5"]),
+    ("              { region = 2, E = 3000.0, nu = 0.2, density = 2.0 } ]", "]", "body[0].materials",
+     ["region(s) 2 have no material"]),
+    ("point = [1.0, 0.5]", "point = [0.9, 0.5]", "body[0].point_load[0].point", ["no mesh node"]),
+    ("stiffness = [0.0, 50.0]", 'stiffness = "stiff"', "body[0].spring[0].stiffness", ["number"]),
+    ("value = 2.0", "value = [2.0, 0.0]", "body[0].pressure[0].value", ["number"]),
+    ("[[body.pressure]]\ntags = [3]", "[[body.pressure]]\ntags = [13]", "body[0].pressure[0].tags",
+     ["no boundary facet"]),
+])
+def test_bad_loads_and_regions(tmp_path, capsys, old, new, key, words):
+    slab_mesh(tmp_path)
+    text = LOADED.replace(old, new)
+    assert text != LOADED
+    (tmp_path / "slab.toml").write_text(text)
+    rc, _, err = run_main(capsys, tmp_path / "slab.toml", "-q")
+    assert rc == 2
+    (line,) = err.strip().splitlines()
+    assert f"slab.toml: {key}: " in line
+    for w in words:
+        assert w in line, line

@@ -25,6 +25,7 @@ from ..mesh.hierarchy import MeshHierarchy
 from ..mesh.io import read_mesh
 from ..mesh.mesh import Mesh
 from ..model.friction import Coulomb, Frictionless, Tresca
+from ..model.loads import PointLoad, point_load_nodes
 from ..model.material import Material
 from ..model.obstacle import PlaneObstacle, SphereObstacle
 from ..model.problem import Body, ContactPair, Dirichlet, Problem
@@ -325,7 +326,7 @@ def _read_body(t: _Table, base: str):
         raise t.error("mesh", str(e)) from None
     levels = t.integer("levels", 1, 1, MAX_LEVELS)
     d = mesh.dim
-    material = _read_material(t, d)
+    material = _read_material(t, mesh)
     dirichlet = []
     for k, bt in enumerate(t.tables("dirichlet")):
         b = _Table(t.file, t.at(f"dirichlet[{k}]"), bt, ("tags", "value"))
@@ -346,33 +347,99 @@ def _read_body(t: _Table, base: str):
                 raise b.error("tags", f"tag {tag} already carries a traction (give one traction per tag)")
             traction[tag] = value
     body_force = t.vector("body_force", d)
-    for name_ in ("pressure", "spring", "point_load", "gravity"):
-        if t.has(name_):
-            raise t.error(name_, "not supported yet")
+    pressure = _per_tag(t, "pressure", "value", mesh, mesh_file, lambda b, k: b.number(k, required=True))
+    springs = _per_tag(t, "spring", "stiffness", mesh, mesh_file, lambda b, k: _stiffness(b, k, d))
+    point_loads = []
+    for k, bt in enumerate(t.tables("point_load")):
+        b = _Table(t.file, t.at(f"point_load[{k}]"), bt, ("point", "force"))
+        pl = PointLoad(b.vector("point", d, required=True), b.vector("force", d, required=True))
+        b.done()
+        try:
+            point_load_nodes(mesh, [pl])
+        except ValueError as e:
+            raise b.error("point", str(e).split(": ", 1)[-1]) from None
+        point_loads.append(pl)
+    gravity = t.vector("gravity", d)
+    if gravity is not None:
+        regions = material.values() if isinstance(material, dict) else [material]
+        if any(m.density is None for m in regions):
+            raise t.error("gravity", "needs a density in the material" + ("" if isinstance(material, Material)
+                                                                            else " of every region"))
     t.done()
     try:
         hierarchy = MeshHierarchy.build(mesh, levels)
     except ValueError as e:
         raise t.error("mesh", str(e)) from None
     # the obstacle's contact tags are set when the obstacles are read (they name the body)
-    body = Body(hierarchy, material, dirichlet, body_force=body_force, traction=traction or None)
+    body = Body(hierarchy, material, dirichlet, body_force=body_force, traction=traction or None,
+                pressure=pressure or None, springs=springs or None, point_loads=point_loads, gravity=gravity)
     return body, BodyInfo(name, mesh_file, levels, hierarchy.finest)
 
 
-def _read_material(t: _Table, d: int) -> Material:
-    if t.has("materials"):
-        raise t.error("materials", "not supported yet: give one material for the body")
-    m = t.table("material", ("E", "nu", "density"))
-    if m is None:
-        raise t.error(None, "material is missing (material = { E = ..., nu = ... })")
+def _per_tag(t: _Table, name: str, key: str, mesh: Mesh, mesh_file: str, read) -> dict:
+    """{tag: value} of the array of tables `name` (each with tags and `key`, read by read(table, key))."""
+    out: dict = {}
+    for k, bt in enumerate(t.tables(name)):
+        b = _Table(t.file, t.at(f"{name}[{k}]"), bt, ("tags", key))
+        tags = b.tags("tags", mesh, mesh_file)
+        value = read(b, key)
+        b.done()
+        for tag in tags:
+            if tag in out:
+                raise b.error("tags", f"tag {tag} already carries a {name.replace('_', ' ')} (give one per tag)")
+            out[tag] = value
+    return out
+
+
+def _stiffness(b: _Table, key: str, d: int):
+    """A spring stiffness per unit area: one number, or one per global axis."""
+    v = b.raw(key)
+    if isinstance(v, list):
+        return b.vector(key, d, required=True)
+    if v is None:
+        raise b.error(None, f"{key} is missing")
+    return b.number(key, required=True)
+
+
+def _one_material(m: _Table) -> Material:
     E = m.number("E", required=True, positive=True)
     nu = m.number("nu", required=True)
     if not -1.0 < nu < 0.5:
         raise m.error("nu", f"Poisson's ratio must lie in (-1, 0.5), got {nu!r}")
-    if m.has("density"):
-        raise m.error("density", "not supported yet")
+    density = m.number("density", nonneg=True)
     m.done()
-    return Material(E, nu)
+    return Material(E, nu, density)
+
+
+def _read_material(t: _Table, mesh: Mesh):
+    """One Material (material = {...}), or {region: Material} (materials = [{region = ..., ...}])."""
+    if t.has("material") and t.has("materials"):
+        raise t.error("materials", "give material (one for the body) or materials (one per region), not both")
+    if t.has("materials"):
+        regions = set(np.unique(mesh.cell_tags).tolist())
+        out = {}
+        tables = t.tables("materials")
+        if not tables:
+            raise t.error("materials", "names no region")
+        for k, mt in enumerate(tables):
+            m = _Table(t.file, t.at(f"materials[{k}]"), mt, ("region", "E", "nu", "density"))
+            region = m.integer("region", None, lo=-2**62)
+            if region is None:
+                raise m.error(None, "region is missing (the cell tag of the region)")
+            if region not in regions:
+                raise m.error("region", f"no cell carries the region tag {region} (the mesh's regions: "
+                                        f"{', '.join(map(str, sorted(regions)))})")
+            if region in out:
+                raise m.error("region", f"region {region} has a material already")
+            out[region] = _one_material(m)
+        missing = sorted(regions - set(out))
+        if missing:
+            raise t.error("materials", f"the cells of region(s) {', '.join(map(str, missing))} have no material")
+        return out
+    m = t.table("material", ("E", "nu", "density"))
+    if m is None:
+        raise t.error(None, "material is missing (material = { E = ..., nu = ... })")
+    return _one_material(m)
 
 
 def _read_friction(t: Optional[_Table]):
