@@ -375,3 +375,25 @@ def test_bad_loads_and_regions(tmp_path, capsys, old, new, key, words):
     assert f"slab.toml: {key}: " in line
     for w in words:
         assert w in line, line
+
+
+@pytest.mark.parametrize("old,new,key,words", [
+    ("levels = 3\nmaterial = { E = 2000.0", "levels = 2\nmaterial = { E = 2000.0", "body[1].levels",
+     ["same levels"]),
+    ('mortar = "lower"', 'mortar = "lowr"', "pair[0].mortar", ["did you mean 'lower'"]),
+    ("mortar_tags = [3]", "mortar_tags = [5]", "pair[0].mortar_tags", ["lower.msh"]),
+    ("search = 0.1", "search = -0.1", "pair[0].search", ["positive"]),
+    ('name = "lower"', 'name = "upper"', "body[1].name", ["taken by body[0]"]),
+])
+def test_bad_two_body_models(tmp_path, capsys, old, new, key, words):
+    d = example("two_blocks", tmp_path)
+    model = d / "blocks.toml"
+    text = model.read_text()
+    assert old in text
+    model.write_text(text.replace(old, new, 1))
+    rc, _, err = run_main(capsys, model, "-q")
+    assert rc == 2
+    (line,) = err.strip().splitlines()
+    assert f"blocks.toml: {key}: " in line
+    for w in words:
+        assert w in line, line
