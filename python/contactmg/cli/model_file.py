@@ -101,6 +101,13 @@ class _Table:
         if not isinstance(data, dict):
             raise ModelError(file, key or None, f"must be a table, got {_kind(data)}")
         self.file, self.key, self.data, self.allowed, self.taken = file, key, data, tuple(allowed), set()
+        self._refuse_unknown()  # at once: before any mesh is read or refined
+
+    def _refuse_unknown(self) -> None:
+        for k in self.data:
+            if k not in self.taken and k not in self.allowed:
+                raise self.error(k, "unknown key" + _close(k, self.allowed)
+                                 + f" (known here: {', '.join(self.allowed)})")
 
     def at(self, name: str) -> str:
         return f"{self.key}.{name}" if self.key else name
@@ -204,10 +211,7 @@ class _Table:
         return _Table(self.file, self.at(name), self.raw(name), allowed)
 
     def done(self) -> None:
-        for k in self.data:
-            if k not in self.taken and k not in self.allowed:
-                raise self.error(k, "unknown key" + _close(k, self.allowed)
-                                 + f" (known here: {', '.join(self.allowed)})")
+        self._refuse_unknown()
         for k in self.data:
             if k not in self.taken:  # a known key that this build does not read: refuse it rather than ignore it
                 raise self.error(k, "not supported yet")
