@@ -229,7 +229,7 @@ void bind_dim(py::module_& m) {
            "A solve from u0 (n, d; None: 0) with the solver's options updated by `options` (a dict of SolverOptions "
            "fields, as the constructor's). method: 'nmg' (monotone multigrid; Algorithm 2 for Coulomb), 'tnnmg' "
            "(truncated nonsmooth Newton multigrid), 'fixed-point' (Algorithm 1, Coulomb only). progress(record: dict) is "
-           "called after every cycle (cycle, outer, correction_norm, energy, seconds, error, active, stick, slip, rebuilt, "
+           "called after every cycle (cycle, outer, correction_norm, solution_norm, energy, seconds, error, active, stick, slip, rebuilt, "
            "step_size, frozen_decrease, linear_iterations, petrov_galerkin); reference (n, d): history['error'] records "
            "||u - reference||_A after every cycle. threads: the result does not depend on it")
       .def("set_load", [](CS& S, DArr load) {

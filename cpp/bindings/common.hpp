@@ -60,6 +60,7 @@ void visit_record(const CycleRecord& r, F&& f) {
   f("cycle", r.cycle);
   f("outer", r.outer);
   f("correction_norm", r.correction_norm);
+  f("solution_norm", r.solution_norm);
   f("energy", r.energy);
   f("seconds", r.seconds);
   f("error", r.error);

@@ -1,5 +1,5 @@
 // The loop around an iteration step: cycles until the correction norm ||u^{k+1} - u^k||_A meets
-// the tolerance (absolute tol, or rtol times the first correction), confirmed by one more
+// the tolerance (absolute tol, or rtol times the larger of the first correction and ||u||_A), confirmed by one more
 // smoothing sweep; divergence and non-finite iterates end it with a message.
 //
 // A Step provides: double iterate(double* phases, bool& rebuilt) (one cycle, returns the energy
@@ -45,6 +45,10 @@ bool run_loop(Step& step, const SolverOptions& opt, const double* reference, Mon
     mon.report(rec);
     const double cn = rec.correction_norm;
     if (first < 0) first = cn;
+    // rtol is relative to the larger of the first correction and the iterate's own energy norm:
+    // both scale with the model's units, and the second does not vanish for a warm start that is
+    // already nearly the solution (a load step that changes little)
+    const double scale = std::max(first, rec.solution_norm);
     if (!std::isfinite(cn) || (cn > kDivergenceFactor * first && first > 0)) {
       R.status = std::isfinite(cn)
                      ? "diverged: correction norm " + fmt3(cn) + " at cycle " + std::to_string(it) + ", " + fmt3(cn / first) +
@@ -54,7 +58,7 @@ bool run_loop(Step& step, const SolverOptions& opt, const double* reference, Mon
       R.converged = false;
       return false;
     }
-    if (cn <= opt.tol || cn <= opt.rtol * first) {
+    if (cn <= opt.tol || cn <= opt.rtol * scale) {
       // The stopping test cannot tell a solution from an iterate that the cycle maps back onto
       // itself while the smoother keeps moving it (a limit cycle of the nonlinear Gauss-Seidel,
       // seen for Coulomb at large F). A solution is a fixed point of one sweep: check that.
@@ -64,7 +68,7 @@ bool run_loop(Step& step, const SolverOptions& opt, const double* reference, Mon
         R.sweep_check = sc;
         pc.lap(Phase::Check);
       }
-      const double allowed = kSweepCheckFactor * std::max(opt.tol, opt.rtol * first);
+      const double allowed = kSweepCheckFactor * std::max(opt.tol, opt.rtol * scale);
       if (R.sweep_check > allowed) {
         R.converged = false;
         R.status = "stalled: the cycle returns to an iterate (correction " + fmt3(cn) +

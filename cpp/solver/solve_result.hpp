@@ -9,6 +9,7 @@ namespace cmg {
 struct CycleRecord {
   int cycle = 0, outer = 0;
   double correction_norm = 0, energy = 0, seconds = 0;
+  double solution_norm = 0;  // ||u||_A of the iterate after the cycle: the scale of a relative stop
   double error = std::numeric_limits<double>::quiet_NaN();  // ||u - u*||_A when a reference is given
   Index active = 0, stick = 0, slip = 0;
   bool rebuilt = false;

@@ -67,7 +67,7 @@ struct SolverOptions {
   CycleType cycle = CycleType::V;
   int nu1 = 3, nu2 = 3;  // pre- and post-smoothing sweeps
   double tol = 1e-11;    // stop when ||u^{k+1} - u^k||_A <= tol
-  double rtol = 0;       // ... or <= rtol * (the first cycle's correction norm)
+  double rtol = 0;       // ... or <= rtol * max(the first cycle's correction norm, ||u||_A)
   int max_cycles = 200;  // per solve (per Tresca solve inside the fixed point)
   // Over-relaxation of the unbounded block solves of every Gauss-Seidel sweep (fine level: nodes
   // without contact; coarse levels: rows without bounds); 1 = plain Gauss-Seidel. Nodal block

@@ -212,6 +212,7 @@ class MonotoneMultigridStep {
         if (s != NodeState::Free) { ++rec.active; (s == NodeState::Stick ? rec.stick : rec.slip)++; }
       }
     rec.energy = e;
+    rec.solution_norm = std::sqrt(std::max(parallel_sum((Index)u.size(), [&](Index k) { return u[k] * Au[k]; }), 0.0));
     rec.petrov_galerkin = pg_.state();
     if (projected_) rec.step_size = step_size_;
   }

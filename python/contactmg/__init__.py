@@ -14,7 +14,8 @@ from .mesh.io import read_mesh, to_meshio, write_mesh
 from .model.material import Material
 from .mesh.mesh import Mesh
 from .model.obstacle import NodalObstacle, PlaneObstacle
-from .model.problem import Body, ContactBoundary, ContactPair, Dirichlet, Problem
+from .model.loads import PointLoad
+from .model.problem import Body, ContactBoundary, ContactPair, Dirichlet, ObstacleContact, Problem
 from .solve.options import SolverOptions, resolve_options
 from .solve.solver import Solver
 from .solve.loadpath import LoadPath, PathResult
@@ -31,7 +32,7 @@ __version__ = "0.2.0"
 __all__ = ["Coulomb", "Frictionless", "Tresca", "contact_frames", "HERTZ_ARC", "HERTZ_TOP", "RECT_BOTTOM",
            "RECT_LEFT", "RECT_RIGHT", "RECT_TOP", "CircleProjector", "hertz_half_disk", "hertz_projector",
            "rectangle", "MeshHierarchy", "Transfer", "read_mesh", "to_meshio", "write_mesh", "Material", "Mesh",
-           "NodalObstacle", "PlaneObstacle", "ContactBoundary", "Problem", "Body", "ContactPair", "Dirichlet",
+           "NodalObstacle", "PlaneObstacle", "ContactBoundary", "Problem", "Body", "ContactPair", "Dirichlet", "ObstacleContact", "PointLoad",
            "Solver", "SolverOptions", "resolve_options", "LoadPath", "PathResult", "adaptive_hierarchy",
            "ContactProblem", "MultiBodyProblem", "TwoBodyProblem", "ContactResult",
            "BALL_SURFACE", "BALL_TOP", "CORK_BOTTOM", "CORK_SIDE", "CORK_TOP", "CylinderProjector", "SphereProjector",

@@ -45,7 +45,7 @@ def test_resolve_options_fills_every_problem_dependent_default():
     assert (r.omega, r.omega_post, r.ordering) == (1.3, 1.3, "coloured")
     assert not (r.local_smoothing or r.petrov_galerkin or r.upwind_contact_sweep or r.projected_coarse_correction)
     adaptive = hertz_problem_on(hertz_adaptive_hierarchy(4, 0.4), 0.4)
-    a = cm.resolve_options(adaptive)
+    a = cm.resolve_options(adaptive, adaptive.default_options)
     assert a.local_smoothing and a.petrov_galerkin and a.upwind_contact_sweep and a.omega_post == 1.5
     assert not cm.resolve_options(adaptive, cm.SolverOptions(petrov_galerkin=False)).petrov_galerkin  # given wins
     assert cm.resolve_options(adaptive, dict(omega=1.1)).omega_post == 1.1  # a given omega is the post omega too

@@ -127,7 +127,7 @@ def test_problem_and_solve_parameters_never_crash(cell, E, nu, law, F, normal, p
        shear=st.one_of(st.just(0.0), st.floats(-0.01, -1e-4), st.floats(1e-4, 0.01)))
 def test_valid_scenes_converge_to_verified_solutions(cell, E, nu, law, F, angle, plane_y, push, shear):
     """Valid scenes drawn at random (material, friction law and size, a plane tilted up to about
-    57 degrees, initial penetration, push and shear): the solve converges within its limit and the
+    57 degrees and touching the arc, small initial penetration, push and shear): the solve converges within its limit and the
     independent check confirms the contact conditions."""
     import contactmg as cm
     from contactmg.results.checks import contact_conditions
@@ -135,8 +135,12 @@ def test_valid_scenes_converge_to_verified_solutions(cell, E, nu, law, F, angle,
 
     h = _hertz_hierarchy(cell)
     friction = {"frictionless": cm.Frictionless(), "tresca": cm.Tresca(F), "coulomb": cm.Coulomb(F)}[law]
+    # the plane touches the arc (centre (0, 0.4), radius 0.4) where its normal n points, moved by
+    # plane_y against n (plane_y > 0: an initial penetration)
+    n = np.array([np.sin(angle), -np.cos(angle)])
+    point = np.array([0.0, 0.4]) + 0.4 * n - plane_y * n
     p = cm.ContactProblem(h, cm.Material(E, nu), [cm.Dirichlet([HERTZ_TOP], (shear, push))], contact_tags=[HERTZ_ARC],
-                          obstacle=cm.PlaneObstacle((0.0, plane_y), (np.sin(angle), -np.cos(angle))), friction=friction)
+                          obstacle=cm.PlaneObstacle(tuple(point), tuple(n)), friction=friction)
     res = p.solve(tol=0.0, rtol=1e-11, max_cycles=300)  # relative: the scenes' scales differ (E from 1 to 1e6)
     assert np.all(np.isfinite(res.displacement))
     assert res.converged, res.status

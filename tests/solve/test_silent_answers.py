@@ -273,10 +273,10 @@ def test_boundary_stress_along_arc_length_keeps_every_node():
     assert np.all(np.diff(sh[np.argsort(x)]) > 0)
 
 
-def test_every_gap_negative_warns_of_a_flipped_normal():
+def test_a_flipped_obstacle_normal_is_refused():
     h = cm.MeshHierarchy.build(rectangle(2, 2), 2)
     kw = dict(material=MAT, dirichlet=[Dirichlet([RECT_TOP], (0.0, -0.01))], contact_tags=[RECT_BOTTOM])
-    with pytest.warns(UserWarning, match="obstacle normal flipped"):
+    with pytest.raises(ValueError, match="normal pointing into the body"):
         ContactProblem(h, obstacle=cm.PlaneObstacle((0.0, -0.1), (0.0, 1.0)), **kw)  # normal into the body
     with warnings.catch_warnings():
         warnings.simplefilter("error")

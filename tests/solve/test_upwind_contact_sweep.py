@@ -5,6 +5,7 @@ friction on 2D adaptive hierarchies, off on uniform ones, in 3D and for the othe
 the same solution and passes the independent check, every iterate stays a fixed point of one plain
 sweep at the end (the visits are the sweep's own row updates), the result does not depend on the
 thread count, and laws without a moving bound are not touched."""
+import contactmg as cm
 import numpy as np
 import pytest
 
@@ -34,7 +35,7 @@ def same_solution(p, a, b, rtol=1e-8):
 
 def test_default_by_hierarchy_and_bad_values(adaptive9):
     a = hertz_problem("triangle", 5, 2.0, coulomb_at_zero=True, hierarchy=adaptive9.truncated(5))
-    assert a.default_options is None and resolve_options(a).upwind_contact_sweep  # 2D adaptive, Coulomb: on
+    assert a.default_options == cm.SolverOptions(tol=1e-11) and resolve_options(a).upwind_contact_sweep  # 2D adaptive, Coulomb: on
     r = a.solve(threads=1)
     assert r.extra["upwind_contact_sweep"] is True
     asked = hertz_problem("triangle", 5, 2.0, coulomb_at_zero=True,

@@ -9,6 +9,7 @@ import resource
 import sys
 
 from ..solve.options import options_from
+from .stop import stop_fields
 
 
 EXIT_OK, EXIT_BAD_INPUT, EXIT_NO_CONVERGENCE = 0, 2, 3
@@ -97,8 +98,12 @@ def add_path_arguments(p) -> None:
 
 def add_stop_options(p) -> None:
     """Add --tol, --max-cycles and --cycle: when a solve stops and which multigrid cycle it runs."""
-    p.add_argument("--tol", type=_nonneg_float("--tol", positive=True), default=1e-11,
-                   help="stop when the correction's energy norm ||u^{k+1} - u^k||_A falls below this")
+    p.add_argument("--tol", type=_nonneg_float("--tol", positive=True), default=None,
+                   help="stop when the correction's energy norm ||u^{k+1} - u^k||_A falls below this; without "
+                        "--rtol the paper's stop (default: 1e-11)")
+    p.add_argument("--rtol", type=_nonneg_float("--rtol", positive=True), default=None,
+                   help="stop when the correction's energy norm falls below this times the larger of the first "
+                        "correction's and ||u||_A (the same cycles in any units)")
     p.add_argument("--max-cycles", type=_positive_int("--max-cycles", 1, MAX_CYCLES), default=200,
                    help="stop as not converged after this many cycles")
     p.add_argument("--cycle", choices=["V", "W", "F"], default="F", help="multigrid cycle type")
@@ -198,7 +203,8 @@ def hertz_report(args, problem, result) -> dict:
     out = {
         "problem": "hertz", "dim": problem.mesh.dim, "cell": args.cell, "levels": args.levels,
         "nodes": int(problem.mesh.num_points), "dofs": int(problem.mesh.num_points * problem.mesh.dim),
-        "method": args.method, "friction": args.friction, "tol": args.tol, "converged": result.converged,
+        "method": args.method, "friction": args.friction, "tol": stop_fields(args).get("tol", 0.0),
+        "rtol": stop_fields(args).get("rtol", 0.0), "converged": result.converged,
         "status": result.status, "cycles": result.cycles, "outer_iterations": result.outer_iterations,
         "setup_seconds": result.setup_seconds, "solve_seconds": result.solve_seconds,
         "history": [{"cycle": int(k), "correction_norm": float(v), "seconds": float(s)}

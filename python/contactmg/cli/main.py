@@ -6,7 +6,7 @@ import os
 import sys
 from typing import List, Optional
 
-from .common import (EXIT_BAD_INPUT, EXIT_NO_CONVERGENCE, EXIT_OK, MAX_LEVELS, PLOT_SUFFIXES, _Parser, _emit_json, _nonneg_float, _positive_int, _with_suffix, _writable, add_path_arguments, add_report_options, add_stop_options, add_thread_options, hertz_report, release_after_build, use_ordering, write_boundary_stress_plot)
+from .common import (EXIT_BAD_INPUT, EXIT_NO_CONVERGENCE, EXIT_OK, MAX_LEVELS, PLOT_SUFFIXES, _Parser, _emit_json, _nonneg_float, _positive_int, _with_suffix, _writable, add_path_arguments, add_report_options, add_stop_options, add_thread_options, hertz_report, release_after_build, stop_fields, use_ordering, write_boundary_stress_plot)
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -83,7 +83,7 @@ def run_hertz(args) -> int:
         result = path.last
     else:
         extra = {} if args.linear is None else {"linear": args.linear}
-        result = problem.solve(args.method, tol=args.tol, max_cycles=args.max_cycles, threads=args.threads,
+        result = problem.solve(args.method, **stop_fields(args), max_cycles=args.max_cycles, threads=args.threads,
                                ordering=args.ordering, **extra)
     report = hertz_report(args, problem, result)
     if cli_path.wanted(args):

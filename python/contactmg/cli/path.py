@@ -7,6 +7,7 @@ from __future__ import annotations
 from typing import Callable, Optional
 
 from ..solve.loadpath import two_phase_path
+from .stop import stop_fields
 
 
 def wanted(args) -> bool:
@@ -38,7 +39,7 @@ def solve(args, problem, tags, first, second, position: Optional[Callable] = Non
     if getattr(args, "shear", None) is not None or getattr(args, "pull_back", False):
         second_steps = args.shear_steps or 1
     path = two_phase_path(problem, tags, first, steps, second if second_steps else None, second_steps)
-    result = path.solve(args.method, tol=args.tol, max_cycles=args.max_cycles)
+    result = path.solve(args.method, **stop_fields(args), max_cycles=args.max_cycles)
     if getattr(args, "series", None):
         result.write_pvd(args.series)
     if getattr(args, "zone_plot", None):

@@ -126,7 +126,7 @@ def run_sphere(args) -> int:
                               position=sphere.radial_distance, label="distance from the axis")
         result = path.last
     else:
-        result = problem.solve(args.method, tol=args.tol, max_cycles=args.max_cycles, threads=args.threads,
+        result = problem.solve(args.method, **cli.stop_fields(args), max_cycles=args.max_cycles, threads=args.threads,
                                ordering=args.ordering)
     report = _report(args, problem, result, "sphere")
     if path is not None:
@@ -195,7 +195,7 @@ def run_cork(args) -> int:
                               position=lambda r: r.mesh.points[r.contact_nodes, 2], label="z")
         result = path.last
     else:
-        result = problem.solve(args.method, tol=args.tol, max_cycles=args.max_cycles, threads=args.threads,
+        result = problem.solve(args.method, **cli.stop_fields(args), max_cycles=args.max_cycles, threads=args.threads,
                                ordering=args.ordering)
     report = cork_report(args, problem, result)
     if path is not None:

@@ -37,7 +37,7 @@ def run_cylinders(args) -> int:
         raise ValueError(f"--nu2: Poisson's ratio must lie in (-1, 0.5), got {args.nu2}")
     problem = cylinders.cylinders_problem(args.levels, args.friction, args.E2, args.nu2,
                                 coulomb_at_zero=args.method == "fixed-point", cycle=args.cycle)
-    result = problem.solve(args.method, tol=args.tol, max_cycles=args.max_cycles)
+    result = problem.solve(args.method, **cli.stop_fields(args), max_cycles=args.max_cycles)
     ns = argparse.Namespace(**vars(args))
     ns.cell, ns.nu1, ns.nu2 = "triangle", 3, 3  # cli.hertz_report's cycle_type: the smoothing steps
     report = cli.hertz_report(ns, problem, result)
@@ -104,7 +104,7 @@ def run_spheres(args) -> int:
         raise ValueError(f"--nu2: Poisson's ratio must lie in (-1, 0.5), got {args.nu2}")
     problem = spheres.spheres_problem(args.cell, args.levels, args.friction, args.E2, args.nu2, args.displacement,
                               coulomb_at_zero=args.method == "fixed-point", cycle=args.cycle)
-    result = problem.solve(args.method, tol=args.tol, max_cycles=args.max_cycles, threads=args.threads,
+    result = problem.solve(args.method, **cli.stop_fields(args), max_cycles=args.max_cycles, threads=args.threads,
                            ordering=args.ordering)
     ns = argparse.Namespace(**vars(args))
     ns.nu1, ns.nu2 = 3, 3  # hertz_report's cycle_type: the smoothing steps

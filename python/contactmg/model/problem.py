@@ -149,6 +149,33 @@ class ContactPair:
     region: Optional[Callable[[np.ndarray], np.ndarray]] = None
 
 
+@dataclass(frozen=True)
+class ObstacleContact:
+    """Body `body` (its index in the problem) may touch the rigid `obstacle` with its facets of the
+    given tags. A body may touch several obstacles (one ObstacleContact each); a node that two of
+    them claim takes the one it is nearer to. The obstacle's normal points from the body into the
+    obstacle (away from the body; the opposite of an Abaqus rigid surface's normal): one given the
+    other way round is refused. Nodes that start inside the obstacle deeper than the size of their
+    contact facets are reported (a UserWarning) unless `allow_penetration` (an intended
+    interference fit); the solve pushes them out onto the obstacle."""
+
+    body: int
+    tags: Sequence[int]
+    obstacle: object
+    allow_penetration: bool = False
+
+    def __post_init__(self):
+        if isinstance(self.body, (bool, np.bool_)) or not isinstance(self.body, (int, np.integer)):
+            raise TypeError(f"ObstacleContact body must be the index of a body, got {self.body!r}")
+        object.__setattr__(self, "tags", tag_tuple(self.tags, "ObstacleContact tags"))
+        if not self.tags:
+            raise ValueError("an ObstacleContact needs at least one facet tag")
+        if not callable(getattr(self.obstacle, "gaps_and_normals", None)) and \
+                not callable(getattr(self.obstacle, "gaps_and_normals_at", None)):
+            raise TypeError("obstacle must be a PlaneObstacle, SphereObstacle, RevolutionObstacle, NodalObstacle or an "
+                            f"object with gaps_and_normals(points), got {type(self.obstacle).__name__}")
+
+
 class Problem:
     """Linear elasticity of one or more bodies with contact and friction: the description.
 
@@ -169,7 +196,8 @@ class Problem:
     # the description does not use it.
     default_options = None
 
-    def __init__(self, bodies, obstacle=None, friction=None, pairs=None, tied_correction: bool = True):
+    def __init__(self, bodies, obstacle=None, friction=None, pairs=None, tied_correction: bool = True,
+                 contacts=None):
         t0 = time.perf_counter()
         single = isinstance(bodies, Body)
         bodies = [bodies] if single else bodies
@@ -186,6 +214,8 @@ class Problem:
             raise TypeError(f"tied_correction must be True or False, got {tied_correction!r}")
         self.bodies, self.friction = bodies, friction
         self.benchmark: Optional[str] = None  # "hertz" for the Hertz benchmark (its zones are centred on x = 0)
+        obstacle_contacts, pairs = _split_contacts(bodies, obstacle, pairs, contacts)
+        self.obstacle_contacts: List[ObstacleContact] = obstacle_contacts
         if len(bodies) == 1:
             if pairs:
                 raise ValueError("pairs couple two bodies of the problem: give several bodies")
@@ -193,22 +223,14 @@ class Problem:
             self.tied_correction = False
             self._init_one(bodies[0], obstacle)
         else:
-            if obstacle is not None:
-                raise ValueError("an obstacle acts on one body: several bodies touch each other through pairs")
-            if any(len(b.contact_tags) for b in bodies):
-                raise ValueError("contact_tags name a body's facets against the obstacle: several bodies touch each "
-                                 "other through pairs")
+            if not pairs:
+                raise TypeError("several bodies need pairs: a ContactPair or a non-empty sequence of ContactPair")
             self.tied_correction = bool(tied_correction)
             self._init_many(bodies, pairs)
         self.assembly_seconds = time.perf_counter() - t0 + sum(b.hierarchy.build_seconds for b in bodies)
 
     # -- one body ---------------------------------------------------------------------------------
     def _init_one(self, b: Body, obstacle) -> None:
-        if len(b.contact_tags) and obstacle is None:
-            raise ValueError("contact_tags are given but no obstacle")
-        if obstacle is not None and not callable(getattr(obstacle, "gaps_and_normals", None)):
-            raise TypeError("obstacle must be a PlaneObstacle, a NodalObstacle or an object with "
-                            f"gaps_and_normals(points), got {type(obstacle).__name__}")
         self.hierarchy, self.material, self.obstacle = b.hierarchy, b.material, obstacle
         mesh = self.mesh = b.hierarchy.finest
         self.springs = b.springs or {}
@@ -220,7 +242,7 @@ class Problem:
         self._load_recipe, self._values_recipe = (b.body_force, b.traction, b.pressure, b.point_loads, b.gravity,
                                                   b.material), list(b.dirichlet)
         self._check_rigid_motion()
-        self.contact = self._contact_boundary(b.contact_tags, obstacle)
+        self.contact, self.contact_source = self._obstacle_boundary(self.obstacle_contacts)
         self.coefficients = friction_coefficients(self.friction, self.contact)
         self.body_id = np.zeros(mesh.num_points, np.int32)
         self.transfers = list(b.hierarchy.transfers)
@@ -228,11 +250,6 @@ class Problem:
     # -- several bodies ---------------------------------------------------------------------------
     def _init_many(self, bodies: List[Body], pairs) -> None:
         import scipy.sparse as sp  # only several bodies need it (a one-body process need not load scipy)
-        if pairs is None:
-            raise TypeError("several bodies need pairs: a ContactPair or a non-empty sequence of ContactPair")
-        pairs = [pairs] if isinstance(pairs, ContactPair) else list(pairs)
-        if not pairs or not all(isinstance(q, ContactPair) for q in pairs):
-            raise TypeError("pairs must be a ContactPair or a non-empty sequence of ContactPair")
         for q in pairs:
             if q.nonmortar == q.mortar or not all(0 <= k < len(bodies) for k in (q.nonmortar, q.mortar)):
                 raise ValueError("a contact pair needs two different bodies of the problem")
@@ -266,12 +283,32 @@ class Problem:
         self.load = (Tk.T @ self.load_canonical.ravel()).reshape(n, d)
         self.fixed = np.vstack([p.fixed for p in self.parts])
         self.fixed_values = np.vstack([p.fixed_values for p in self.parts])
-        order = np.argsort(fine["nodes"], kind="stable")  # contact nodes ascending
-        nodes, normals = fine["nodes"][order], np.ascontiguousarray(fine["normals"][order])
-        measure, gaps = fine["measure"][order], np.ascontiguousarray(fine["gaps"][order])
-        self.pair_of_contact = fine["pair"][order]
+        # the nodes against rigid obstacles: w = u there (no nonmortar node may be one of them)
+        nodes, normals, gaps, measure = fine["nodes"], fine["normals"], fine["gaps"], fine["measure"]
+        source, facets = fine["pair"], [fine["facets"]]
+        for j, oc in enumerate(self.obstacle_contacts):
+            part = self.parts[oc.body]
+            b = part._contact_boundary(oc.tags, oc.obstacle, oc)
+            onodes = b.nodes + self.offsets[oc.body]
+            if np.any(np.isin(onodes, fine["nodes"])):
+                raise ValueError(f"obstacle contact {j} (body {oc.body}, tags {list(oc.tags)}) shares nodes with the "
+                                 "nonmortar side of a contact pair: a node touches one thing (make that body the mortar "
+                                 "side, or give the obstacle other facets)")
+            nodes, normals = np.r_[nodes, onodes], np.vstack([normals, b.normals])
+            gaps, measure = np.r_[gaps, b.gaps], np.r_[measure, b.measure]
+            source = np.r_[source, np.full(len(onodes), -1 - j, np.int32)]
+            facets.append(b.facets + self.offsets[oc.body])
+        nodes, keep = _nearest_obstacle(nodes, gaps, source)
+        order = np.argsort(nodes, kind="stable")  # contact nodes ascending
+        keep = keep[order]
+        nodes, normals = nodes[order], np.ascontiguousarray(normals[keep])
+        measure, gaps = measure[keep], np.ascontiguousarray(gaps[keep])
+        self.contact_source = source[keep].astype(np.int32)
+        self.pair_of_contact = self.contact_source  # pair k >= 0; -1 - j: obstacle contact j
         self.contact = ContactBoundary(nodes.astype(np.int64), normals, gaps, measure,
-                                       facets=np.ascontiguousarray(fine["facets"]), frames=contact_frames(normals))
+                                       facets=np.ascontiguousarray(np.vstack(facets)),
+                                       frames=contact_frames(normals, self.fixed[nodes]) if self.obstacle_contacts
+                                       else contact_frames(normals))
         self.coefficients = friction_coefficients(self.friction, self.contact)
         self.transfers = self._transfers()
 
@@ -326,7 +363,28 @@ class Problem:
             label = label[t.parent[t.ptr[:-1]]]
         return count, label
 
-    def _contact_boundary(self, tags, obstacle) -> ContactBoundary:
+    def _obstacle_boundary(self, contacts: Sequence[ObstacleContact]):
+        """The contact boundary of one body against its obstacles, and per contact node the index
+        of its ObstacleContact as -1 - j."""
+        if not contacts:
+            return self._contact_boundary((), None), np.zeros(0, np.int32)
+        parts = [self._contact_boundary(oc.tags, oc.obstacle, oc) for oc in contacts]
+        if len(parts) == 1:
+            return parts[0], np.full(len(parts[0].nodes), -1, np.int32)
+        nodes = np.concatenate([b.nodes for b in parts])
+        gaps = np.concatenate([b.gaps for b in parts])
+        source = np.concatenate([np.full(len(b.nodes), -1 - j, np.int32) for j, b in enumerate(parts)])
+        nodes, keep = _nearest_obstacle(nodes, gaps, source)
+        order = np.argsort(nodes, kind="stable")
+        keep = keep[order]
+        normals = np.ascontiguousarray(np.vstack([b.normals for b in parts])[keep])
+        c = ContactBoundary(nodes[order].astype(np.int64), normals, np.ascontiguousarray(gaps[keep]),
+                            np.concatenate([b.measure for b in parts])[keep],
+                            facets=np.ascontiguousarray(np.vstack([b.facets for b in parts])),
+                            frames=contact_frames(normals, self.fixed[nodes[order]]))
+        return c, source[keep]
+
+    def _contact_boundary(self, tags, obstacle, contact: Optional[ObstacleContact] = None) -> ContactBoundary:
         mesh, d = self.mesh, self.mesh.dim
         if not len(tags):
             return ContactBoundary(np.zeros(0, np.int64), np.zeros((0, d)), np.zeros(0), np.zeros(0),
@@ -357,10 +415,8 @@ class Problem:
         if len(nodes) == 0:
             raise ValueError(f"the contact boundary is empty: every node of the facets tagged {list(tags)} is fixed by "
                              "Dirichlet data (are the contact tags the Dirichlet tags?)")
-        if np.all(gaps < 0):
-            warnings.warn(f"every contact node starts inside the obstacle (gaps from {gaps.min():.3g} to {gaps.max():.3g}): "
-                          "is the obstacle normal flipped? It must point from the body into the obstacle", UserWarning,
-                          stacklevel=3)
+        _check_obstacle_placement(mesh, facets, nodes, gaps, normals, tags,
+                                  contact is not None and contact.allow_penetration)
         ones = np.ones((mesh.num_points, 1))
         measure = _core.assemble_facet_load(mesh.points, facets, ones)[nodes, 0]
         normals = np.ascontiguousarray(normals)
@@ -620,3 +676,118 @@ def _union_mesh(meshes: Sequence[Mesh], offsets: np.ndarray) -> Mesh:
                          np.vstack([m.facets + o for m, o in zip(meshes, offsets)]),
                          np.concatenate([m.facet_tags for m in meshes]),
                          np.concatenate([m.cell_tags for m in meshes]))
+
+
+def _split_contacts(bodies, obstacle, pairs, contacts):
+    """(obstacle contacts, pairs) of the problem's arguments: `contacts` (ObstacleContact and
+    ContactPair) and the short forms (`obstacle` with the bodies' contact_tags, `pairs`)."""
+    if contacts is None:
+        contacts = []
+    elif isinstance(contacts, (ObstacleContact, ContactPair)):
+        contacts = [contacts]
+    else:
+        try:
+            contacts = list(contacts)
+        except TypeError:
+            raise TypeError("contacts must be a sequence of ObstacleContact and ContactPair") from None
+    for c in contacts:
+        if not isinstance(c, (ObstacleContact, ContactPair)):
+            raise TypeError(f"contacts must hold ObstacleContact and ContactPair, got {type(c).__name__}")
+    if pairs is None:
+        pairs = []
+    elif isinstance(pairs, ContactPair):
+        pairs = [pairs]
+    else:
+        try:
+            pairs = list(pairs)
+        except TypeError:
+            raise TypeError("pairs must be a ContactPair or a non-empty sequence of ContactPair") from None
+    if not all(isinstance(q, ContactPair) for q in pairs):
+        raise TypeError("pairs must be a ContactPair or a non-empty sequence of ContactPair")
+    pairs = pairs + [c for c in contacts if isinstance(c, ContactPair)]
+    obstacles = [c for c in contacts if isinstance(c, ObstacleContact)]
+    tagged = [k for k, b in enumerate(bodies) if len(b.contact_tags)]
+    if obstacle is not None:
+        if not callable(getattr(obstacle, "gaps_and_normals", None)):
+            raise TypeError("obstacle must be a PlaneObstacle, a NodalObstacle or an object with "
+                            f"gaps_and_normals(points), got {type(obstacle).__name__}")
+        if len(bodies) > 1:
+            raise ValueError("obstacle= is the short form for one body: give several bodies their obstacles as "
+                             "contacts=[ObstacleContact(body, tags, obstacle), ...]")
+        if tagged:
+            obstacles.insert(0, ObstacleContact(0, bodies[0].contact_tags, obstacle))
+    elif tagged:
+        if len(bodies) > 1:
+            raise ValueError("contact_tags name a body's facets against the obstacle= of one body: give several "
+                             "bodies their obstacles as contacts=[ObstacleContact(body, tags, obstacle), ...]")
+        raise ValueError("contact_tags are given but no obstacle")
+    for oc in obstacles:
+        if not 0 <= oc.body < len(bodies):
+            raise ValueError(f"an ObstacleContact names body {oc.body}; the problem has bodies 0..{len(bodies) - 1}")
+    return obstacles, pairs
+
+
+def _nearest_obstacle(nodes: np.ndarray, gaps: np.ndarray, source: np.ndarray):
+    """(unique nodes, the row kept for each): a node claimed by several contacts keeps the one with
+    the smallest gap (the obstacle it is nearest to; ties: the first given)."""
+    order = np.lexsort((np.arange(len(nodes)), gaps, nodes))
+    first = np.r_[True, nodes[order][1:] != nodes[order][:-1]]
+    keep = order[first]
+    return nodes[keep], keep
+
+
+def _check_obstacle_placement(mesh, facets, nodes, gaps, normals, tags, allow_penetration: bool) -> None:
+    """Refuse an obstacle whose normal points into the body (it would be solved without a word into
+    a body through the obstacle), and report (unless allowed) one that starts deeper inside the body
+    than the size of its contact facets.
+
+    The body's outward normal at a node is the measure-weighted mean of its contact facets'
+    normals. An obstacle normal points from the body into the obstacle, so where the body will
+    touch it (the nodes nearest the obstacle) the two normals agree: a negative mean of their dot
+    product there is an obstacle given the wrong way round."""
+    d = mesh.dim
+    X = mesh.points[facets]
+    if d == 2:
+        t = X[:, 1] - X[:, 0]
+        fn = np.c_[t[:, 1], -t[:, 0]]                       # outward normal times length
+        size = np.linalg.norm(t, axis=1)
+    else:
+        fn = 0.5 * np.cross(X[:, 1] - X[:, 0], X[:, 2] - X[:, 0])
+        if facets.shape[1] == 4:
+            fn = fn + 0.5 * np.cross(X[:, 2] - X[:, 0], X[:, 3] - X[:, 0])
+        size = np.sqrt(np.linalg.norm(fn, axis=1))
+    pos = np.searchsorted(nodes, facets)
+    pos = np.minimum(pos, len(nodes) - 1)
+    hit = nodes[pos] == facets
+    body_n = np.zeros((len(nodes), d))
+    h = np.zeros(len(nodes))
+    count = np.zeros(len(nodes))
+    for a in range(facets.shape[1]):
+        sel = hit[:, a]
+        np.add.at(body_n, pos[sel, a], fn[sel])
+        np.add.at(h, pos[sel, a], size[sel])
+        np.add.at(count, pos[sel, a], 1.0)
+    h = h / np.maximum(count, 1.0)
+    length = np.linalg.norm(body_n, axis=1)
+    body_n = body_n / np.where(length > 0, length, 1.0)[:, None]
+    weight = length
+    # the nodes on the obstacle's surface (|gap| within half a facet), else those nearest to it
+    near = np.abs(gaps) <= 0.5 * h
+    if not np.any(near):
+        near = gaps <= gaps.min() + 0.5 * np.median(h)
+    agree = float(np.sum(weight[near] * np.einsum("ij,ij->i", body_n[near], normals[near])))
+    if agree < 0:
+        raise ValueError(f"the obstacle of the facets tagged {list(tags)} has its normal pointing into the body (the "
+                         "body's outward normal and the obstacle normal disagree at the nodes nearest the obstacle): "
+                         "contactmg's obstacle normal points from the body into the obstacle, away from the body (the "
+                         "opposite of an Abaqus rigid surface); turn the normal round (a sphere: check inside=), or check "
+                         "that the contact tags name the facets that face the obstacle")
+    deep = gaps < -h
+    if np.any(deep) and not allow_penetration:
+        k = int(np.argmin(gaps / h))
+        warnings.warn(f"{int(deep.sum())} node(s) of the facets tagged {list(tags)} start inside the obstacle deeper "
+                      f"than their contact facets are long (node {int(nodes[k])} at "
+                      f"{np.round(mesh.points[nodes[k]], 6).tolist()}: gap {gaps[k]:.3g}, facet size {h[k]:.3g}); the "
+                      "solve pushes them out onto the obstacle. Is the obstacle placed right? (an intended "
+                      "interference fit: ObstacleContact(..., allow_penetration=True) says so)", UserWarning,
+                      stacklevel=4)

@@ -239,8 +239,9 @@ class ContactResult:
 
     def contact_forces(self) -> Dict[str, np.ndarray]:
         """The total contact force (d,) in global x, y(, z), the units of the load: one body, key
-        "obstacle", the force of the obstacle on the body; several bodies, key "pair k", the force
-        of the mortar body on the nonmortar body of pair k (the mortar body feels its opposite).
+        "obstacle", the force of the obstacle on the body; with several contacts, keys "pair k" (the
+        force of the mortar body on the nonmortar body of pair k, whose mortar body feels its
+        opposite) and "obstacle j" (the force of the j-th ObstacleContact's obstacle on its body).
         The sum of A u - f over the contact nodes, less their Dirichlet-fixed components (those
         count as reactions). Without a contact boundary: {}."""
         p = self._known_problem("contact_forces()")
@@ -248,9 +249,12 @@ class ContactResult:
         if len(c.nodes) == 0:
             return {}
         f = np.where(p.fixed[c.nodes].astype(bool), 0.0, self.residual()[c.nodes])
-        if not p.multibody:
+        source = p.contact_source
+        if not p.multibody and len(p.obstacle_contacts) == 1:
             return {"obstacle": f.sum(axis=0)}
-        return {f"pair {k}": f[p.pair_of_contact == k].sum(axis=0) for k in range(len(p.pairs))}
+        out = {f"pair {k}": f[source == k].sum(axis=0) for k in range(len(p.pairs))}
+        out.update({f"obstacle {j}": f[source == -1 - j].sum(axis=0) for j in range(len(p.obstacle_contacts))})
+        return out
 
     def strain(self, at: str = "cells") -> np.ndarray:
         """The small strain (m, 3, 3), dimensionless: at="cells" at every cell centroid, at="nodes"

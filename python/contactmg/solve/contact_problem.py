@@ -1,6 +1,7 @@
 """Deprecated aliases of Problem, kept for one release: ContactProblem (one body against an
 obstacle), MultiBodyProblem and TwoBodyProblem (bodies through mortar pairs). Each builds a Problem;
-the cycle options given here are the defaults of problem.solve()."""
+the cycle options given here are the defaults of problem.solve(), and so is the absolute stop 1e-11
+that was the default when they were the API."""
 from __future__ import annotations
 
 from typing import Dict, Optional, Sequence
@@ -8,7 +9,7 @@ from typing import Dict, Optional, Sequence
 from ..mesh.hierarchy import MeshHierarchy
 from ..model.material import Material
 from ..model.problem import Body, ContactPair, Dirichlet, Problem, VectorField
-from .options import SolverOptions
+from .options import PAPER_TOL, SolverOptions
 
 
 class ContactProblem(Problem):
@@ -21,7 +22,7 @@ class ContactProblem(Problem):
                  contact_tags: Sequence[int] = (), obstacle=None, friction=None,
                  body_force: Optional[VectorField] = None, traction: Optional[Dict[int, VectorField]] = None,
                  cycle: str = "F", nu1: int = 3, nu2: int = 3):
-        self.default_options = SolverOptions(cycle=cycle, nu1=nu1, nu2=nu2)
+        self.default_options = SolverOptions(cycle=cycle, nu1=nu1, nu2=nu2, tol=PAPER_TOL)
         super().__init__(Body(hierarchy, material, dirichlet, contact_tags, body_force, traction), obstacle, friction)
 
 
@@ -34,7 +35,7 @@ class MultiBodyProblem(Problem):
         bodies = list(bodies) if not isinstance(bodies, Body) else [bodies]
         if len(bodies) < 2 or not all(isinstance(b, Body) for b in bodies):
             raise TypeError("bodies must be a sequence of at least two Body")
-        self.default_options = SolverOptions(cycle=cycle, nu1=nu1, nu2=nu2)
+        self.default_options = SolverOptions(cycle=cycle, nu1=nu1, nu2=nu2, tol=PAPER_TOL)
         super().__init__(bodies, friction=friction, pairs=pairs, tied_correction=tied_correction)
 
 
