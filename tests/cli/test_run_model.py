@@ -397,3 +397,77 @@ def test_bad_two_body_models(tmp_path, capsys, old, new, key, words):
     assert f"blocks.toml: {key}: " in line
     for w in words:
         assert w in line, line
+
+
+# -- several contacts ---------------------------------------------------------------------------
+CORNER = """
+[[body]]
+name = "block"
+mesh = "block.msh"
+levels = 3
+material = { E = 100.0, nu = 0.3 }
+[[body.dirichlet]]
+tags = 3
+value = [-0.01, -0.02]
+[[obstacle]]
+body = "block"
+tags = 1
+type = "plane"
+point = [0.0, 0.0]
+normal = [0.0, -1.0]
+[[obstacle]]
+body = "block"
+tags = 4
+type = "plane"
+point = [0.0, 0.0]
+normal = [-1.0, 0.0]
+[friction]
+law = "coulomb"
+coefficient = 0.2
+[output]
+json = "corner.json"
+"""
+
+
+def test_a_block_pushed_into_a_corner_touches_floor_and_wall(tmp_path, capsys):
+    shutil.copy(MODELS / "block_2d" / "block.msh", tmp_path)
+    (tmp_path / "corner.toml").write_text(CORNER)
+    rc, _, err = run_main(capsys, tmp_path / "corner.toml", "-q")
+    assert rc == 0, err
+    rep = json.loads((tmp_path / "corner.json").read_text())
+    f = {k: np.asarray(v) for k, v in rep["contact_forces"].items()}
+    assert set(f) == {"obstacle 0", "obstacle 1"}
+    assert f["obstacle 0"][1] > 0 and f["obstacle 1"][0] > 0  # the floor pushes up, the wall right
+    (reaction,) = rep["reactions"]
+    balance = f["obstacle 0"] + f["obstacle 1"] + np.asarray(reaction["force"])
+    assert np.abs(balance).max() <= 1e-10 * np.abs(f["obstacle 0"]).max()
+    assert rep["check_max"] < 1e-8
+
+
+def test_an_obstacle_beside_a_pair(tmp_path, capsys):
+    """The two blocks, the lower one resting on a floor instead of clamped (held sideways at its left
+    edge, vertically by a spring too weak to matter): the floor carries the upper block's push."""
+    d = example("two_blocks", tmp_path)
+    model = d / "blocks.toml"
+    text = model.read_text().replace('tags = [1]\nvalue = [0.0, 0.0]', 'tags = [4]\nvalue = [0.0, "free"]')
+    text = text.replace("body_force = [0.0, -1.0]\n", "[[body.spring]]\ntags = 2\nstiffness = [0.0, 1e-6]\n")
+    text += ('[[obstacle]]\nbody = "lower"\ntags = [1]\ntype = "plane"\npoint = [0.0, 0.0]\n'
+             'normal = [0.0, -1.0]\n')
+    model.write_text(text)
+    rc, out, err = run_main(capsys, model, "-q")
+    assert rc == 0, err
+    rep = json.loads((d / "out" / "blocks.json").read_text())
+    f = {k: np.asarray(v) for k, v in rep["contact_forces"].items()}
+    assert set(f) == {"pair 0", "obstacle 0"}
+    push = -next(r["force"] for r in rep["reactions"] if r["body"] == "upper")[1]
+    assert push > 0 and f["pair 0"][1] == pytest.approx(push, rel=1e-10)
+    assert f["obstacle 0"][1] == pytest.approx(push, rel=1e-6)
+
+
+def test_a_plane_given_the_wrong_way_round_is_refused(tmp_path, capsys):
+    shutil.copy(MODELS / "block_2d" / "block.msh", tmp_path)
+    (tmp_path / "corner.toml").write_text(CORNER.replace("normal = [0.0, -1.0]", "normal = [0.0, 1.0]"))
+    rc, _, err = run_main(capsys, tmp_path / "corner.toml", "-q")
+    assert rc == 2
+    (line,) = err.strip().splitlines()
+    assert "corner.toml: " in line and "normal" in line

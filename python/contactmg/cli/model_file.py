@@ -28,7 +28,7 @@ from ..model.friction import Coulomb, Frictionless, Tresca
 from ..model.loads import PointLoad, point_load_nodes
 from ..model.material import Material
 from ..model.obstacle import PlaneObstacle, SphereObstacle
-from ..model.problem import Body, ContactPair, Dirichlet, Problem
+from ..model.problem import Body, ContactPair, Dirichlet, ObstacleContact, Problem
 from ..solve.options import SolverOptions
 from .common import MAX_LEVELS, PLOT_SUFFIXES
 
@@ -297,7 +297,8 @@ def read_model(path) -> Model:
                                                         f"{infos[0].levels}, this one {info.levels}")
     friction, friction_info = _read_friction(top.table("friction", ("law", "coefficient", "bound")))
     obstacles = [_read_obstacle(_Table(file, f"obstacle[{k}]", t, ("body", "tags", "type", "point", "normal", "center",
-                                                                  "radius", "inside", "axis")), names, infos)
+                                                                  "radius", "inside", "axis",
+                                                                  "allow_penetration")), names, infos)
                  for k, t in enumerate(top.tables("obstacle"))]
     pairs = [_read_pair(_Table(file, f"pair[{k}]", t, ("nonmortar", "mortar", "nonmortar_tags", "mortar_tags",
                                                        "search")), names, infos)
@@ -483,21 +484,22 @@ def _read_obstacle(t: _Table, names, infos):
     kind = t.string("type", required=True, choices=OBSTACLE_TYPES)
     d = mesh.dim
     if kind == "plane":
-        t.allowed = ("body", "tags", "type", "point", "normal")
+        t.allowed = ("body", "tags", "type", "point", "normal", "allow_penetration")
         point = t.vector("point", d, required=True)
         normal = t.vector("normal", d, required=True)
         if not any(normal):
             raise t.error("normal", "must not be the zero vector")
         obstacle = PlaneObstacle(point, normal)
     elif kind == "sphere":
-        t.allowed = ("body", "tags", "type", "center", "radius", "inside")
+        t.allowed = ("body", "tags", "type", "center", "radius", "inside", "allow_penetration")
         center = t.vector("center", d, required=True)
         radius = t.number("radius", required=True, positive=True)
         obstacle = SphereObstacle(center, radius, t.boolean("inside", False))
     else:
         raise t.error("type", 'a cylinder obstacle is not supported yet (use "plane" or "sphere")')
+    allow = t.boolean("allow_penetration", False)
     t.done()
-    return k, tags, obstacle
+    return ObstacleContact(k, tags, obstacle, allow)
 
 
 def _read_pair(t: _Table, names, infos):
@@ -554,24 +556,16 @@ def _read_outputs(t: Optional[_Table], base: str, dim: int) -> Outputs:
     return out
 
 
-def _problem(file: str, bodies: List[Body], obstacles, pairs, friction) -> Problem:
-    if len(bodies) == 1:
-        if pairs:
-            raise ModelError(file, "pair", "a pair couples two bodies: the model has one")
-        if len(obstacles) > 1:
-            raise ModelError(file, "obstacle[1]", "not supported yet: one obstacle per model")
-        obstacle = None
-        if obstacles:
-            _, tags, obstacle = obstacles[0]
-            bodies[0].contact_tags = tags
-        args = dict(obstacle=obstacle)
-    else:
-        if obstacles:
-            raise ModelError(file, "obstacle[0]", "not supported yet: obstacles in a model of several bodies")
-        if not pairs:
-            raise ModelError(file, "pair", "several bodies touch each other through pairs ([[pair]]): none given")
-        args = dict(pairs=pairs)
+def _problem(file: str, bodies: List[Body], obstacles: List[ObstacleContact], pairs: List[ContactPair],
+             friction) -> Problem:
+    if len(bodies) == 1 and pairs:
+        raise ModelError(file, "pair", "a pair couples two bodies: the model has one")
+    if len(bodies) > 1 and not pairs:
+        raise ModelError(file, "pair", "several bodies touch each other through pairs ([[pair]]): none given")
     try:
-        return Problem(bodies if len(bodies) > 1 else bodies[0], friction=friction, **args)
+        # pairs first: result.contact_forces() names them "pair k" and the obstacles "obstacle j" in
+        # the order of the file
+        return Problem(bodies if len(bodies) > 1 else bodies[0], friction=friction,
+                       contacts=[*pairs, *obstacles] or None)
     except (ValueError, TypeError) as e:
         raise ModelError(file, None, str(e)) from None

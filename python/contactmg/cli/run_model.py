@@ -66,7 +66,8 @@ def model_report(model: Model, results, seconds: float) -> dict:
                     "cells": int(b.mesh.num_cells)} for b in model.bodies],
         "levels": max(b.levels for b in model.bodies),
         "nodes": int(p.mesh.num_points), "dofs": int(p.mesh.num_points * p.mesh.dim),
-        "method": model.options.method, "law": p.law, "friction": model.friction, "tol": model.options.tol,
+        "method": model.options.method, "law": p.law, "friction": model.friction,
+        "tol": model.options.stop[0], "rtol": model.options.stop[1],
         "converged": converged, "status": res.status, "cycles": res.cycles,
         "cycles_per_step": [int(r.cycles) for r in results],
         # the layout of the load path commands' reports (cli/path.py): a row per step solved, the path's totals
