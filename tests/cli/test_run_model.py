@@ -471,3 +471,14 @@ def test_a_plane_given_the_wrong_way_round_is_refused(tmp_path, capsys):
     assert rc == 2
     (line,) = err.strip().splitlines()
     assert "corner.toml: " in line and "normal" in line
+
+
+def test_the_boundary_stress_plot_is_refused_for_a_3d_model(tmp_path, capsys):
+    d = example("block_3d", tmp_path)
+    model = d / "block.toml"
+    model.write_text(model.read_text().replace('json = "out/block.json"', 'json = "out/block.json"\nplot = "b.png"'))
+    rc, _, err = run_main(capsys, model, "-q")
+    assert rc == 2
+    (line,) = err.strip().splitlines()
+    assert "block.toml: output.plot: " in line and "2D" in line
+    assert not (d / "out").exists()  # nothing written before the model is read whole
