@@ -25,7 +25,7 @@ from .results.result import ContactResult
 
 from .mesh.generators_3d import (BALL_SURFACE, BALL_TOP, CORK_BOTTOM, CORK_SIDE, CORK_TOP, CylinderProjector,  # noqa: E402
                             SphereProjector, ball_projector, box, cylinder, half_ball)
-from .model.obstacle import RevolutionObstacle, SphereObstacle  # noqa: E402
+from .model.obstacle import CylinderObstacle, MeshObstacle, RevolutionObstacle, SphereObstacle  # noqa: E402
 
 __version__ = "0.2.0"
 
@@ -36,4 +36,4 @@ __all__ = ["Coulomb", "Frictionless", "Tresca", "contact_frames", "HERTZ_ARC", "
            "Solver", "SolverOptions", "resolve_options", "LoadPath", "PathResult", "adaptive_hierarchy",
            "ContactProblem", "MultiBodyProblem", "TwoBodyProblem", "ContactResult",
            "BALL_SURFACE", "BALL_TOP", "CORK_BOTTOM", "CORK_SIDE", "CORK_TOP", "CylinderProjector", "SphereProjector",
-           "ball_projector", "box", "cylinder", "half_ball", "RevolutionObstacle", "SphereObstacle"]
+           "ball_projector", "box", "cylinder", "half_ball", "RevolutionObstacle", "SphereObstacle", "CylinderObstacle", "MeshObstacle"]

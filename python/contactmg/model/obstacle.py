@@ -189,3 +189,176 @@ class RevolutionObstacle:
         m = np.where(on[:, None], seg_n, sign[:, None] * (f - q) / np.where(on, 1.0, d)[:, None])
         normals = m[:, :1] * e_rho + m[:, 1:] * a
         return np.where(on, 0.0, sign * d), normals / np.linalg.norm(normals, axis=1)[:, None]
+
+
+@dataclass(frozen=True)
+class CylinderObstacle:
+    """A rigid circular cylinder (3D) of `radius` about the axis through `point` along `axis`,
+    infinitely long. inside=False: the body is outside a rigid rod; inside=True: the body is inside a
+    rigid bore. (In 2D a cylinder's section is a circle: SphereObstacle.)"""
+
+    point: Tuple[float, ...]
+    axis: Tuple[float, ...]
+    radius: float
+    inside: bool = False
+
+    def gaps_and_normals(self, x: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
+        """(gaps (m,), normals (m, d)) of the points `x` (m, d): distance to the obstacle along its normal and the body's outward normal there."""
+        if x.shape[1] != 3:
+            raise ValueError("CylinderObstacle is a 3D obstacle (in 2D use SphereObstacle, a circle)")
+        if not (np.isfinite(self.radius) and self.radius > 0):
+            raise ValueError(f"the cylinder's radius must be positive, got {self.radius}")
+        a = _unit(self.axis, "the axis")
+        p = np.asarray(self.point, dtype=float)
+        if p.shape != (3,) or not np.all(np.isfinite(p)):
+            raise ValueError("the cylinder's point must have 3 finite components")
+        v = x - p
+        radial = v - (v @ a)[:, None] * a
+        rho = np.linalg.norm(radial, axis=1)
+        if np.any(rho == 0):
+            raise ValueError("a contact node sits on the cylinder's axis: its normal is undefined")
+        e = radial / rho[:, None]
+        if self.inside:
+            return self.radius - rho, e
+        return rho - self.radius, -e
+
+
+class MeshObstacle:
+    """A rigid obstacle given by its surface mesh: segments (2D) or triangles (3D), e.g. the
+    boundary of a gmsh model of the obstacle (`MeshObstacle.read(path)`). Each contact node is
+    projected onto its closest point on the surface; the gap is its distance along the surface's
+    normal there. The surface may be open (a rigid floor of any shape) but must be oriented
+    consistently; which side is solid is taken from the body: the side the contact nodes are not
+    on (`body_side=+1`: the side the facet normals point to, -1: the other, None: decided from the
+    nodes)."""
+
+    def __init__(self, points, facets, body_side: Optional[int] = None):
+        self.points = np.ascontiguousarray(np.asarray(points, dtype=float))
+        self.facets = np.ascontiguousarray(np.asarray(facets, dtype=np.int64))
+        d = self.points.shape[1] if self.points.ndim == 2 else 0
+        if d not in (2, 3) or self.facets.ndim != 2 or self.facets.shape[1] != d or len(self.facets) == 0:
+            raise ValueError("MeshObstacle needs points (n, 2) with segments (m, 2), or points (n, 3) with triangles "
+                             f"(m, 3); got points {self.points.shape} and facets {self.facets.shape}")
+        if np.any((self.facets < 0) | (self.facets >= len(self.points))) or not np.all(np.isfinite(self.points)):
+            raise ValueError("MeshObstacle facets refer to nodes out of range, or its points are not finite")
+        if body_side not in (None, 1, -1):
+            raise ValueError(f"body_side must be +1, -1 or None, got {body_side!r}")
+        X = self.points[self.facets]
+        if d == 2:
+            t = X[:, 1] - X[:, 0]
+            n = np.c_[t[:, 1], -t[:, 0]]
+        else:
+            n = np.cross(X[:, 1] - X[:, 0], X[:, 2] - X[:, 0])
+        length = np.linalg.norm(n, axis=1)
+        if np.any(length == 0):
+            raise ValueError(f"MeshObstacle facet {int(np.argmax(length == 0))} is degenerate")
+        self.normals = n / length[:, None]
+        self.body_side = body_side
+
+    @classmethod
+    def read(cls, path, body_side: Optional[int] = None) -> "MeshObstacle":
+        """The surface of anything meshio reads: its lines (2D: the z coordinate must be 0) or
+        triangles (quads split in two)."""
+        import meshio
+
+        m = meshio.read(path)
+        tri = [b.data for b in m.cells if b.type == "triangle"]
+        quad = [b.data for b in m.cells if b.type == "quad"]
+        if tri or quad:
+            facets = np.vstack(tri + [q[:, [0, 1, 2]] for q in quad] + [q[:, [0, 2, 3]] for q in quad])
+            return cls(m.points[:, :3], facets, body_side)
+        lines = [b.data for b in m.cells if b.type == "line"]
+        if not lines:
+            raise ValueError(f"{path} holds no surface of an obstacle (lines in 2D, triangles or quads in 3D)")
+        pts = m.points
+        if pts.shape[1] == 3 and np.any(pts[:, 2] != 0):
+            raise ValueError(f"{path}: a 2D obstacle's lines need z = 0")
+        return cls(pts[:, :2], np.vstack(lines), body_side)
+
+    def _closest(self, x: np.ndarray):
+        """(closest points (m, d), the facet of each) by a search over the facets whose centroids
+        are nearest (enough of them to hold the closest facet of a reasonably graded surface)."""
+        from scipy.spatial import cKDTree
+
+        X = self.points[self.facets]
+        centroid = X.mean(axis=1)
+        k = min(len(self.facets), 16)
+        _, cand = cKDTree(centroid).query(x, k=k)
+        cand = cand.reshape(len(x), k)
+        best = np.full(len(x), np.inf)
+        point = np.zeros_like(x)
+        facet = np.zeros(len(x), np.int64)
+        for j in range(k):
+            f = cand[:, j]
+            c = _closest_on_segment(x, X[f, 0], X[f, 1]) if x.shape[1] == 2 else _closest_on_triangle(x, X[f])
+            dist = np.linalg.norm(x - c, axis=1)
+            better = dist < best
+            best[better], point[better], facet[better] = dist[better], c[better], f[better]
+        return point, facet
+
+    def gaps_and_normals(self, x: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
+        """(gaps (m,), normals (m, d)) of the points `x` (m, d): distance to the obstacle along its normal and the body's outward normal there."""
+        return self.gaps_and_normals_facing(x, None)
+
+    def gaps_and_normals_facing(self, x: np.ndarray, body_normals: Optional[np.ndarray]):
+        """gaps_and_normals of the points `x` of a body whose outward normals there are
+        `body_normals` (None: unknown). The solid side, unless body_side fixes it: where the nodes
+        lie off the surface, the side they are not on; where they lie on it, the side their
+        outward normals point to."""
+        if x.shape[1] != self.points.shape[1]:
+            raise ValueError(f"a {self.points.shape[1]}D obstacle surface for a {x.shape[1]}D body")
+        c, f = self._closest(x)
+        nf = self.normals[f]
+        signed = np.einsum("ij,ij->i", x - c, nf)           # > 0: the node on the side nf points to
+        side = self.body_side
+        if side is None:
+            size = float(np.ptp(self.points, axis=0).max())
+            off = np.abs(signed) > 1e-9 * size
+            if body_normals is not None and not np.any(off):
+                side = 1 if np.sum(np.einsum("ij,ij->i", nf, body_normals)) <= 0 else -1
+            else:
+                side = 1 if np.sum(signed[off]) >= 0 else -1
+        n = -side * nf                                      # from the body into the obstacle
+        return side * signed, n
+
+
+def _closest_on_segment(x, a, b):
+    t = b - a
+    s = np.clip(np.einsum("ij,ij->i", x - a, t) / np.einsum("ij,ij->i", t, t), 0.0, 1.0)
+    return a + s[:, None] * t
+
+
+def _closest_on_triangle(p, T):
+    """The closest points of the triangles T (m, 3, 3) to the points p (m, 3) (Ericson, Real-Time
+    Collision Detection, 5.1.5), vectorized over the pairs."""
+    a, b, c = T[:, 0], T[:, 1], T[:, 2]
+    ab, ac, ap = b - a, c - a, p - a
+    dot = lambda u, v: np.einsum("ij,ij->i", u, v)
+    d1, d2 = dot(ab, ap), dot(ac, ap)
+    bp = p - b
+    d3, d4 = dot(ab, bp), dot(ac, bp)
+    cp = p - c
+    d5, d6 = dot(ab, cp), dot(ac, cp)
+    va = d3 * d6 - d5 * d4
+    vb = d5 * d2 - d1 * d6
+    vc = d1 * d4 - d3 * d2
+    out = np.empty_like(p)
+    done = np.zeros(len(p), bool)
+
+    def put(mask, value):
+        nonlocal done
+        m = mask & ~done
+        out[m] = value[m]
+        done |= m
+
+    put((d1 <= 0) & (d2 <= 0), a)
+    put((d3 >= 0) & (d4 <= d3), b)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        put((vc <= 0) & (d1 >= 0) & (d3 <= 0), a + (d1 / (d1 - d3))[:, None] * ab)
+        put((d6 >= 0) & (d5 <= d6), c)
+        put((vb <= 0) & (d2 >= 0) & (d6 <= 0), a + (d2 / (d2 - d6))[:, None] * ac)
+        put((va <= 0) & ((d4 - d3) >= 0) & ((d5 - d6) >= 0), b + ((d4 - d3) / ((d4 - d3) + (d5 - d6)))[:, None] * (c - b))
+        denom = 1.0 / (va + vb + vc)
+        v, w = vb * denom, vc * denom
+        put(np.ones(len(p), bool), a + v[:, None] * ab + w[:, None] * ac)
+    return out

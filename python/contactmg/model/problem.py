@@ -30,6 +30,7 @@ from .frames import contact_frames
 from .friction import Coulomb, Frictionless, Tresca
 from .loads import PointLoad, VectorField, assemble_load, field_values, spring_blocks, tag_tuple
 from .material import Material, Materials, check_materials, core_moduli
+from .rigid_motion import check_held_by_contact, free_modes
 
 if TYPE_CHECKING:
     from .mortar import MortarCoupling
@@ -241,9 +242,10 @@ class Problem:
         # the setters clear these)
         self._load_recipe, self._values_recipe = (b.body_force, b.traction, b.pressure, b.point_loads, b.gravity,
                                                   b.material), list(b.dirichlet)
-        self._check_rigid_motion()
+        floating = self._check_rigid_motion(held_by_contact=bool(self.obstacle_contacts))
         self.contact, self.contact_source = self._obstacle_boundary(self.obstacle_contacts)
         self.coefficients = friction_coefficients(self.friction, self.contact)
+        self._check_held_by_contact(floating)
         self.body_id = np.zeros(mesh.num_points, np.int32)
         self.transfers = list(b.hierarchy.transfers)
 
@@ -327,9 +329,10 @@ class Problem:
         """The fine mortar coupling of the first pair."""
         return self.couplings[0]
 
-    def _check_rigid_motion(self):
-        """The Dirichlet dofs must pin every rigid-body motion of every connected piece of the body
-        (no contact relied on): a piece that floats free makes the problem singular."""
+    def _check_rigid_motion(self, held_by_contact: bool = False) -> list:
+        """The Dirichlet dofs (and springs) must pin every rigid-body motion of every connected
+        piece of the body, or (held_by_contact) its contacts must: returns the pieces left to the
+        contacts as (nodes, free modes), for _check_held_by_contact."""
         mesh = self.mesh
         x, d = mesh.points, mesh.dim
         fixed = self.fixed.astype(bool)
@@ -339,16 +342,36 @@ class Problem:
         count, label = self._pieces()
         order = np.argsort(label, kind="stable")
         bounds = np.searchsorted(label[order], np.arange(count + 1))
+        floating = []
         for k in range(count):
             nodes = np.sort(order[bounds[k]:bounds[k + 1]])
             if _holds_rigid_motion(x[nodes], fixed[nodes]):
+                continue
+            if held_by_contact:
+                floating.append((nodes, free_modes(x[nodes], fixed[nodes]), k, count))
                 continue
             where = "" if count == 1 else (
                 f" of piece {k + 1} of the {count} disconnected pieces of the mesh ({len(nodes)} nodes, "
                 f"node {int(nodes[0])} at {np.round(x[nodes[0]], 6).tolist()})")
             raise ValueError(f"the Dirichlet conditions{' and springs' if self.springs else ''} leave rigid-body motion"
                              f"{where} free: fix enough displacement components to hold " +
-                             ("the body" if count == 1 else "every piece"))
+                             ("the body" if count == 1 else "every piece") + " (or let an obstacle hold it)")
+        return floating
+
+    def _check_held_by_contact(self, floating: list) -> None:
+        """Every piece whose supports leave rigid motions free must touch an obstacle that can hold
+        them under the load (model/rigid_motion.py): else a ValueError naming the free motion."""
+        c, x = self.contact, self.mesh.points
+        for nodes, modes, k, count in floating:
+            where = "the body" if count == 1 else f"piece {k + 1} of the {count} disconnected pieces of the mesh"
+            sel = np.isin(c.nodes, nodes)
+            if not np.any(sel):
+                raise ValueError(f"the Dirichlet conditions{' and springs' if self.springs else ''} leave rigid-body "
+                                 f"motion of {where} free and no contact boundary touches it: fix enough displacement "
+                                 "components to hold it")
+            rows = np.searchsorted(nodes, c.nodes[sel])
+            check_held_by_contact(x[nodes], modes, self.load[nodes], rows, c.normals[sel], c.frames[sel],
+                                  self.law, self.coefficients[sel], where)
 
     def _pieces(self):
         """(count, label) of the connected pieces of the finest mesh, found on the coarsest mesh
@@ -398,7 +421,11 @@ class Problem:
         nodes = nodes[~self.fixed[nodes].all(axis=1)]
         at_nodes = getattr(obstacle, "gaps_and_normals_at", None)
         x = mesh.points[nodes]
-        gaps, normals = at_nodes(nodes, x) if callable(at_nodes) else obstacle.gaps_and_normals(x)
+        facing = getattr(obstacle, "gaps_and_normals_facing", None)
+        if callable(facing):  # an obstacle that takes its solid side from the body (MeshObstacle)
+            gaps, normals = facing(x, _body_normals(mesh, facets, nodes)[0])
+        else:
+            gaps, normals = at_nodes(nodes, x) if callable(at_nodes) else obstacle.gaps_and_normals(x)
         gaps, normals = np.asarray(gaps, dtype=float), np.asarray(normals, dtype=float)
         if gaps.shape != (len(nodes),) or normals.shape != (len(nodes), d):
             raise ValueError(f"the obstacle gave gaps of shape {gaps.shape} and normals of shape {normals.shape} "
@@ -736,15 +763,9 @@ def _nearest_obstacle(nodes: np.ndarray, gaps: np.ndarray, source: np.ndarray):
     return nodes[keep], keep
 
 
-def _check_obstacle_placement(mesh, facets, nodes, gaps, normals, tags, allow_penetration: bool) -> None:
-    """Refuse an obstacle whose normal points into the body (it would be solved without a word into
-    a body through the obstacle), and report (unless allowed) one that starts deeper inside the body
-    than the size of its contact facets.
-
-    The body's outward normal at a node is the measure-weighted mean of its contact facets'
-    normals. An obstacle normal points from the body into the obstacle, so where the body will
-    touch it (the nodes nearest the obstacle) the two normals agree: a negative mean of their dot
-    product there is an obstacle given the wrong way round."""
+def _body_normals(mesh, facets: np.ndarray, nodes: np.ndarray):
+    """(outward unit normal (m, d), mean facet size (m,), facet measure around (m,)) of the body at
+    the `nodes` (ascending) from its contact `facets`."""
     d = mesh.dim
     X = mesh.points[facets]
     if d == 2:
@@ -770,7 +791,19 @@ def _check_obstacle_placement(mesh, facets, nodes, gaps, normals, tags, allow_pe
     h = h / np.maximum(count, 1.0)
     length = np.linalg.norm(body_n, axis=1)
     body_n = body_n / np.where(length > 0, length, 1.0)[:, None]
-    weight = length
+    return body_n, h, length
+
+
+def _check_obstacle_placement(mesh, facets, nodes, gaps, normals, tags, allow_penetration: bool) -> None:
+    """Refuse an obstacle whose normal points into the body (it would be solved without a word into
+    a body through the obstacle), and report (unless allowed) one that starts deeper inside the body
+    than the size of its contact facets.
+
+    The body's outward normal at a node is the measure-weighted mean of its contact facets'
+    normals. An obstacle normal points from the body into the obstacle, so where the body will
+    touch it (the nodes nearest the obstacle) the two normals agree: a negative mean of their dot
+    product there is an obstacle given the wrong way round."""
+    body_n, h, weight = _body_normals(mesh, facets, nodes)
     # the nodes on the obstacle's surface (|gap| within half a facet), else those nearest to it
     near = np.abs(gaps) <= 0.5 * h
     if not np.any(near):
