@@ -482,3 +482,72 @@ def test_the_boundary_stress_plot_is_refused_for_a_3d_model(tmp_path, capsys):
     (line,) = err.strip().splitlines()
     assert "block.toml: output.plot: " in line and "2D" in line
     assert not (d / "out").exists()  # nothing written before the model is read whole
+
+
+# -- curved and meshed obstacles ----------------------------------------------------------------
+def _swap_obstacle(text, new):
+    start = text.index("[[obstacle]]")
+    end = text.index("[friction]")
+    return text[:start] + new + text[end:]
+
+
+def _solve_text(tmp_path, capsys, name, text):
+    (tmp_path / f"{name}.toml").write_text(text.replace('json = "out/block.json"', f'json = "{name}.json"')
+                                            .replace('vtu = "out/block.vtu"', f'vtu = "{name}.vtu"'))
+    rc, _, err = run_main(capsys, tmp_path / f"{name}.toml", "-q")
+    assert rc == 0, err
+    return json.loads((tmp_path / f"{name}.json").read_text()), meshio.read(tmp_path / f"{name}.vtu")
+
+
+def test_a_2d_cylinder_is_the_circle_and_a_flat_surface_mesh_the_plane(tmp_path, capsys):
+    d = example("block_2d", tmp_path)
+    text = (d / "block.toml").read_text().replace("pvd = ", "# pvd = ").replace("plot = ", "# plot = ")
+    circle = '[[obstacle]]\nbody = "block"\ntags = [1]\ntype = "{}"\n{} = [0.5, -2.0]\nradius = 2.0\n'
+    rep_c, vtu_c = _solve_text(d, capsys, "cyl", _swap_obstacle(text, circle.format("cylinder", "point")))
+    rep_s, vtu_s = _solve_text(d, capsys, "sph", _swap_obstacle(text, circle.format("sphere", "center")))
+    assert rep_c["cycles_per_step"] == rep_s["cycles_per_step"]
+    assert np.array_equal(vtu_c.point_data["displacement"], vtu_s.point_data["displacement"])
+    assert 0 < rep_c["contact_nodes"] < 33  # a circle touches part of the bottom edge (33 nodes)
+
+    # the floor y = 0 as a surface mesh of two segments: the plane's answer
+    meshio.write(d / "floor.msh", meshio.Mesh(np.array([[-1.0, 0.0, 0.0], [0.5, 0.0, 0.0], [2.0, 0.0, 0.0]]),
+                                             [("line", np.array([[0, 1], [1, 2]]))]), file_format="gmsh22")
+    floor = '[[obstacle]]\nbody = "block"\ntags = [1]\ntype = "mesh"\nmesh = "floor.msh"\n'
+    rep_m, vtu_m = _solve_text(d, capsys, "floor", _swap_obstacle(text, floor))
+    rep_p, vtu_p = _solve_text(d, capsys, "plane", text)
+    assert rep_m["cycles_per_step"] == rep_p["cycles_per_step"]
+    assert np.abs(vtu_m.point_data["displacement"] - vtu_p.point_data["displacement"]).max() <= 1e-12
+
+
+def test_a_3d_block_on_a_rod_touches_along_it(tmp_path, capsys):
+    """A rod along y under the block's centre line: contact along the whole width in y, a narrow band
+    in x; symmetric about x = 0.5 (no net x force); the rod's force balances the top's reaction."""
+    d = example("block_3d", tmp_path)
+    rod = ('[[obstacle]]\nbody = "block"\ntags = [5]\ntype = "cylinder"\npoint = [0.5, 0.0, -2.0]\n'
+           'axis = [0.0, 1.0, 0.0]\nradius = 2.0\n')
+    rep, vtu = _solve_text(d, capsys, "rod", _swap_obstacle((d / "block.toml").read_text(), rod))
+    contact = np.asarray(rep["contact_forces"]["obstacle"])
+    (reaction,) = rep["reactions"]
+    assert np.abs(np.asarray(reaction["force"]) + contact).max() <= 1e-10 * np.abs(contact).max()
+    assert contact[2] > 0 and abs(contact[0]) <= 1e-8 * contact[2]
+    touching = vtu.points[vtu.point_data["node_state"] > 0]
+    assert touching[:, 1].min() == 0.0 and touching[:, 1].max() == 1.0
+    assert np.abs(touching[:, 0] - 0.5).max() < 0.5
+
+
+@pytest.mark.parametrize("new,key,words", [
+    ('type = "cylinder"\npoint = [0.5, -2.0]\naxis = [0.0, 1.0]\nradius = 2.0\n', "obstacle[0].axis", ["circle"]),
+    ('type = "mesh"\nmesh = "nofloor.msh"\n', "obstacle[0].mesh", ["no such file"]),
+    ('type = "mesh"\nmesh = "block.msh"\nbody_side = 2\n', "obstacle[0].body_side", ["1 or -1"]),
+])
+def test_bad_curved_and_meshed_obstacles(tmp_path, capsys, new, key, words):
+    text = BASE.replace('type = "plane"\npoint = [0.0, 0.0]\nnormal = [0.0, -1.0]\n', new)
+    assert text != BASE
+    shutil.copy(MODELS / "block_2d" / "block.msh", tmp_path)
+    (tmp_path / "bad.toml").write_text(text)
+    rc, _, err = run_main(capsys, tmp_path / "bad.toml", "-q")
+    assert rc == 2
+    (line,) = err.strip().splitlines()
+    assert f"bad.toml: {key}: " in line
+    for w in words:
+        assert w in line, line

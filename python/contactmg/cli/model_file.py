@@ -27,7 +27,7 @@ from ..mesh.mesh import Mesh
 from ..model.friction import Coulomb, Frictionless, Tresca
 from ..model.loads import PointLoad, point_load_nodes
 from ..model.material import Material
-from ..model.obstacle import PlaneObstacle, SphereObstacle
+from ..model.obstacle import CylinderObstacle, MeshObstacle, PlaneObstacle, SphereObstacle
 from ..model.problem import Body, ContactPair, Dirichlet, ObstacleContact, Problem
 from ..solve.options import SolverOptions
 from .common import MAX_LEVELS, PLOT_SUFFIXES
@@ -36,7 +36,7 @@ MAX_STEPS = 100000
 TOP_KEYS = ("description", "body", "obstacle", "pair", "friction", "steps", "solver", "output")
 BODY_KEYS = ("name", "mesh", "levels", "material", "materials", "dirichlet", "traction", "pressure", "spring",
              "point_load", "body_force", "gravity")
-OBSTACLE_TYPES = ("plane", "sphere", "cylinder")
+OBSTACLE_TYPES = ("plane", "sphere", "cylinder", "mesh")
 FRICTION_LAWS = ("frictionless", "coulomb", "tresca")
 PATH_METHODS = ("nmg", "fixed-point")
 
@@ -297,8 +297,8 @@ def read_model(path) -> Model:
                                                         f"{infos[0].levels}, this one {info.levels}")
     friction, friction_info = _read_friction(top.table("friction", ("law", "coefficient", "bound")))
     obstacles = [_read_obstacle(_Table(file, f"obstacle[{k}]", t, ("body", "tags", "type", "point", "normal", "center",
-                                                                  "radius", "inside", "axis",
-                                                                  "allow_penetration")), names, infos)
+                                                                  "radius", "inside", "axis", "mesh", "body_side",
+                                                                  "allow_penetration")), names, infos, base)
                  for k, t in enumerate(top.tables("obstacle"))]
     pairs = [_read_pair(_Table(file, f"pair[{k}]", t, ("nonmortar", "mortar", "nonmortar_tags", "mortar_tags",
                                                        "search")), names, infos)
@@ -477,26 +477,54 @@ def _body_ref(t: _Table, key: str, names: Dict[str, int]) -> int:
     return names[name]
 
 
-def _read_obstacle(t: _Table, names, infos):
+def _read_obstacle(t: _Table, names, infos, base: str):
     k = _body_ref(t, "body", names)
     mesh, mesh_file = infos[k].mesh, infos[k].mesh_file
     tags = t.tags("tags", mesh, mesh_file)
     kind = t.string("type", required=True, choices=OBSTACLE_TYPES)
     d = mesh.dim
+    common = ("body", "tags", "type", "allow_penetration")
     if kind == "plane":
-        t.allowed = ("body", "tags", "type", "point", "normal", "allow_penetration")
+        t.allowed = common + ("point", "normal")
         point = t.vector("point", d, required=True)
         normal = t.vector("normal", d, required=True)
         if not any(normal):
             raise t.error("normal", "must not be the zero vector")
         obstacle = PlaneObstacle(point, normal)
     elif kind == "sphere":
-        t.allowed = ("body", "tags", "type", "center", "radius", "inside", "allow_penetration")
+        t.allowed = common + ("center", "radius", "inside")
         center = t.vector("center", d, required=True)
         radius = t.number("radius", required=True, positive=True)
         obstacle = SphereObstacle(center, radius, t.boolean("inside", False))
+    elif kind == "cylinder":
+        # in 2D a cylinder's section is a circle about `point`: no axis
+        t.allowed = common + (("point", "axis", "radius", "inside") if d == 3 else ("point", "radius", "inside"))
+        if d == 2 and t.has("axis"):
+            raise t.error("axis", "a 2D cylinder is a circle about point: give point and radius, no axis")
+        point = t.vector("point", d, required=True)
+        axis = t.vector("axis", d, required=True) if d == 3 else None
+        if axis is not None and not any(axis):
+            raise t.error("axis", "must not be the zero vector")
+        radius = t.number("radius", required=True, positive=True)
+        inside = t.boolean("inside", False)
+        obstacle = CylinderObstacle(point, axis, radius, inside) if d == 3 else SphereObstacle(point, radius, inside)
     else:
-        raise t.error("type", 'a cylinder obstacle is not supported yet (use "plane" or "sphere")')
+        t.allowed = common + ("mesh", "body_side")
+        surface = t.string("mesh", required=True)
+        side = t.raw("body_side")
+        if side is not None and (isinstance(side, bool) or side not in (1, -1)):
+            raise t.error("body_side", f"must be 1 or -1 (the side of the surface's normals the body is on), got "
+                                       f"{_kind(side)}")
+        path = _path(base, surface)
+        if not os.path.exists(path):
+            raise t.error("mesh", f"cannot read {path}: no such file")
+        try:
+            with contextlib.redirect_stdout(io.StringIO()):
+                obstacle = MeshObstacle.read(path, side)
+        except (Exception, SystemExit) as e:  # meshio raises many kinds, and exits on some files
+            raise t.error("mesh", f"cannot read the obstacle surface {path}: {e or type(e).__name__}") from None
+        if obstacle.points.shape[1] != d:
+            raise t.error("mesh", f"the obstacle surface {surface} is {obstacle.points.shape[1]}D, the body {d}D")
     allow = t.boolean("allow_penetration", False)
     t.done()
     return ObstacleContact(k, tags, obstacle, allow)
