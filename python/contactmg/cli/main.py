@@ -58,6 +58,8 @@ def _parser() -> argparse.ArgumentParser:
     from . import two_body
     two_body.add_cylinders_parser(sub)
     two_body.add_spheres_parser(sub)
+    from . import run_model
+    run_model.add_run_parser(sub)
     return p
 
 
@@ -118,6 +120,9 @@ def main(argv: Optional[List[str]] = None) -> int:
         if args.command == "spheres":
             from .two_body import run_spheres
             return run_spheres(args)
+        if args.command == "run":
+            from .run_model import run_model
+            return run_model(args)
         from .three_d import COMMANDS
         if args.command in COMMANDS:
             return COMMANDS[args.command](args)
