@@ -12,7 +12,7 @@ import time
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
-FOLDERS = ("paper", "three_d", "methods", "performance")
+FOLDERS = ("paper", "three_d", "methods", "performance", "model")
 
 
 def scripts():

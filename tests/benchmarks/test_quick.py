@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 BENCHMARKS = Path(__file__).resolve().parents[2] / "benchmarks"
-FOLDERS = ("paper", "three_d", "methods", "performance")
+FOLDERS = ("paper", "three_d", "methods", "performance", "model")
 SCRIPTS = sorted(f"{d}/{p.stem}" for d in FOLDERS for p in (BENCHMARKS / d).glob("*.py"))
 HISTORY = re.compile(r"\b(issue|stop|part|branch|perf|smooth)[ -]?\d+|docs/history", re.IGNORECASE)
 
@@ -166,6 +166,16 @@ def check_skip_work(res):
             assert abs(r["cycles"] - full["cycles"]) <= 1
 
 
+def check_engineering_models(res):
+    # every model solves and is checked: equilibrium and the contact conditions
+    assert len(res) == 8
+    for r in res:
+        assert r["converged"] and r["balance"] < 1e-9 and r["conditions"] < 1e-6, r
+    # the same model in three systems of units takes the same cycles (the default stop is relative)
+    units = [r["cycles"][0] for r in res if r["model"].startswith("rounded block in")]
+    assert len(units) == 3 and max(units) - min(units) <= 2
+
+
 CHECKS = {"paper/table1": check_table1, "paper/hertz_stresses": check_hertz_stresses,
           "paper/algorithm1_vs_2": check_algorithm1_vs_2, "three_d/sphere": check_sphere, "three_d/cork": check_cork,
           "three_d/two_bodies": check_two_bodies, "methods/tnnmg_vs_nmg": check_tnnmg_vs_nmg,
@@ -173,7 +183,7 @@ CHECKS = {"paper/table1": check_table1, "paper/hertz_stresses": check_hertz_stre
           "methods/linear_multigrid": check_linear_multigrid, "methods/cycle_options": check_cycle_options,
           "methods/load_path": check_load_path, "performance/cycle_time": check_cycle_time,
           "performance/threads": check_threads, "performance/memory": check_memory,
-          "performance/skip_work": check_skip_work}
+          "performance/skip_work": check_skip_work, "model/engineering_models": check_engineering_models}
 
 
 def test_every_script_is_checked_and_documented():

@@ -105,6 +105,8 @@ def test_springs_hold_the_body_and_give_the_exact_settlement():
     shorten = -p * (1 - mat.nu ** 2) / mat.E
     assert np.allclose(res.displacement[y == 0.0, 1], settle, rtol=1e-9)
     assert np.allclose(res.displacement[y == 1.0, 1], settle + shorten, rtol=1e-9)
+    # the springs carry the pressure: their force balances the load
+    assert res.spring_forces()[BOTTOM] == pytest.approx([0.0, p * 1.0], abs=1e-9 * p)
 
 
 def test_springs_are_counted_as_support():

@@ -212,6 +212,23 @@ class ContactResult:
         Au = (p.A_canonical @ u.ravel()).reshape(u.shape) if p.multibody else p.A.matvec(u)
         return Au - self.canonical_load()
 
+    def spring_forces(self) -> Dict:
+        """The force (d,) of each elastic support on its body, in global components: -k u summed
+        over the nodes of its facets (k lumped per node, as in the stiffness). Keys: the spring's
+        tag, for several bodies (body index, tag). With the reactions, the contact forces and the
+        load they balance."""
+        from ..model.loads import spring_blocks
+
+        p = self._known_problem("spring_forces()")
+        out = {}
+        parts = p.parts if p.multibody else [p]
+        for k, (part, b) in enumerate(zip(parts, p.bodies)):
+            u = self.displacement[p.offsets[k]:p.offsets[k + 1]] if p.multibody else self.displacement
+            for tag, stiffness in (b.springs or {}).items():
+                blocks = spring_blocks(part.mesh, {tag: stiffness})
+                out[(k, tag) if p.multibody else tag] = -np.einsum("nab,nb->a", blocks, u)
+        return out
+
     def reactions(self) -> Dict:
         """The support reaction of every Dirichlet condition (force vector (d,) in global x, y(, z),
         the units of the load): the sum of A u - f over the components it fixes at the nodes of its
