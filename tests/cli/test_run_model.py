@@ -551,3 +551,24 @@ def test_bad_curved_and_meshed_obstacles(tmp_path, capsys, new, key, words):
     assert f"bad.toml: {key}: " in line
     for w in words:
         assert w in line, line
+
+
+def test_fillet_cylinder_on_a_tilted_plane(tmp_path, capsys):
+    """The gmsh-made 3D cylinder with a filleted edge: it balances, sticks and slides on the tilted
+    plane within the friction cone, and its contact zone lies on the fillet's side that the plane's
+    tilt lifts towards (x > 0)."""
+    d = example("fillet_cylinder", tmp_path)
+    rc, out, err = run_main(capsys, d / "cylinder.toml", "--json", "-", "-q")
+    assert rc == 0, err
+    rep = json.loads(out)
+    assert rep["dim"] == 3 and rep["cell"] == "tetra" and rep["converged"] and rep["cycles"] <= 30
+    contact = np.asarray(rep["contact_forces"]["obstacle"])
+    (reaction,) = rep["reactions"]
+    assert np.abs(np.asarray(reaction["force"]) + contact).max() <= 1e-10 * np.abs(contact).max()
+    # the force of the plane lies in its friction cone: tangential <= 0.3 x normal
+    n = np.array([0.1736482, 0.0, -0.9848078])
+    normal = -contact @ n
+    assert normal > 0 and np.linalg.norm(contact + normal * n) <= 0.3 * normal * (1 + 1e-9)
+    assert rep["check_max"] < 1e-8 and rep["stick_nodes"] > 0
+    vtu = meshio.read(d / "out" / "cylinder.vtu")
+    assert np.all(vtu.points[vtu.point_data["node_state"] > 0][:, 0] > 0)
