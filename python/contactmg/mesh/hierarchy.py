@@ -215,7 +215,30 @@ class MeshHierarchy:
     @property
     def levels(self) -> int:
         """The number of levels."""
-        return self._levels if self._meshes is None else len(self._meshes)
+        if self._meshes is None:
+            return self._levels
+        return len(self._transfers) + 1 if self.kind == "aggregation" else len(self._meshes)
+
+    @classmethod
+    def aggregated(cls, mesh: Mesh, coarsest: int = 200, omega: float = 1.0) -> "MeshHierarchy":
+        """Coarse levels made from the fine `mesh` alone, by nonnegative smoothed aggregation
+        (mesh/aggregation.py) down to at most `coarsest` nodes: for a mesh as it comes from a mesher,
+        with no coarse mesh to refine. The hierarchy holds the fine mesh and the transfers; its
+        coarse levels have no meshes (kind "aggregation")."""
+        from .aggregation import aggregation_prolongations
+
+        t0 = time.perf_counter()
+        _core.check_cells(mesh.points, mesh.cells, mesh.cell_type)
+        transfers = []
+        for P in aggregation_prolongations(mesh, coarsest=coarsest, omega=omega):
+            transfers.append(Transfer(P.shape[0], P.shape[1], P.indptr.astype(np.int64), P.indices.astype(np.int64),
+                                      P.data.astype(float)))
+        return cls([mesh], transfers, time.perf_counter() - t0, kind="aggregation")
+
+    def _has_coarse_meshes(self, what: str) -> None:
+        if self.kind == "aggregation":
+            raise ValueError(f"{what} needs the coarse meshes, and an aggregation hierarchy has none (its coarse "
+                             "levels are aggregates of the fine mesh's nodes)")
 
     @classmethod
     def build(cls, mesh: Mesh, levels: int, projector: Optional[Projector] = None,
@@ -241,6 +264,7 @@ class MeshHierarchy:
 
     def truncated(self, levels: int) -> "MeshHierarchy":
         """The first `levels` levels (coarse to fine) of this hierarchy, sharing its meshes."""
+        self._has_coarse_meshes("truncated()")
         if isinstance(levels, bool) or not isinstance(levels, (int, np.integer)) or not 1 <= levels <= self.levels:
             raise ValueError(f"levels must lie in 1..{self.levels}, got {levels!r}")
         return MeshHierarchy(self.meshes[:levels], self.transfers[:levels - 1], self.build_seconds, self.kind,
@@ -253,6 +277,7 @@ class MeshHierarchy:
         composed: still nested, the fine nodes interpolated from the kept coarse ones). A strongly
         graded hierarchy (small Doerfler theta, growth 1.2-1.5 per level) becomes one with
         geometric growth, so that a cycle over it costs O(n_L) even with full smoothing."""
+        self._has_coarse_meshes("thinned()")
         if isinstance(min_growth, bool) or not isinstance(min_growth, (int, float)) or not min_growth >= 1:
             raise ValueError(f"min_growth must be a number >= 1, got {min_growth!r}")
         keep = [0]
@@ -290,6 +315,7 @@ class MeshHierarchy:
         return np.unique(touched).astype(np.int64)
 
     def _check_level(self, level):
+        self._has_coarse_meshes("a level's nodes")
         if isinstance(level, bool) or not isinstance(level, (int, np.integer)) or not 0 <= level < self.levels:
             raise ValueError(f"level must be an index 0..{self.levels - 1}, got {level!r}")
 

@@ -420,6 +420,8 @@ class Problem:
         (refinement splits cells and joins nothing) and handed down through the transfers: a
         fine node lies in the piece of its first coarse parent."""
         h = self.hierarchy
+        if h.kind == "aggregation":  # no coarse mesh: count on the fine one
+            return connected_components(self.mesh.cells, self.mesh.num_points)
         coarse = h.meshes[0]
         count, label = connected_components(coarse.cells, coarse.num_points)
         for t in h.transfers:
@@ -511,7 +513,8 @@ class Problem:
 
         from .mortar import mortar_coupling_2d
         from .mortar_3d import mortar_coupling_3d
-        meshes = [b.hierarchy.meshes[level] for b in self.bodies]
+        meshes = [b.hierarchy.finest if level == b.hierarchy.levels - 1 else b.hierarchy.meshes[level]
+                  for b in self.bodies]
         offsets = np.r_[0, np.cumsum([m.num_points for m in meshes])].astype(np.int64)
         n = int(offsets[-1])
         rows, cols, vals = [], [], []
