@@ -36,7 +36,7 @@ def rate(h, omega, omega_post=None):
 
 def test_off_by_default_and_bad_values():
     p = hertz_problem("triangle", 2, 0.4)
-    assert p.default_options == cm.SolverOptions(tol=1e-11)
+    assert p.default_options == cm.SolverOptions(method="nmg", tol=1e-11)
     r = p.solve()
     assert "omega_post" not in r.extra
     same = p.solve(omega_post=resolve_options(p).omega)  # equal to omega: the same sweeps, the same bits

@@ -38,7 +38,7 @@ def same_solution(p, a, b, rtol=1e-8):
 
 def test_default_by_hierarchy_and_bad_values(adaptive7):
     p = hertz_problem("triangle", 3, 0.4)
-    assert p.default_options == cm.SolverOptions(tol=1e-11) and not resolve_options(p).petrov_galerkin  # uniform: off
+    assert p.default_options == cm.SolverOptions(method="nmg", tol=1e-11) and not resolve_options(p).petrov_galerkin  # uniform: off
     assert resolve_options(p).omega_post == resolve_options(p).omega  # no post-smoothing omega of its own
     r = p.solve()
     assert "petrov_galerkin" not in r.extra

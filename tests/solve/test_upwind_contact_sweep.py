@@ -35,7 +35,7 @@ def same_solution(p, a, b, rtol=1e-8):
 
 def test_default_by_hierarchy_and_bad_values(adaptive9):
     a = hertz_problem("triangle", 5, 2.0, coulomb_at_zero=True, hierarchy=adaptive9.truncated(5))
-    assert a.default_options == cm.SolverOptions(tol=1e-11) and resolve_options(a).upwind_contact_sweep  # 2D adaptive, Coulomb: on
+    assert a.default_options == cm.SolverOptions(method="nmg", tol=1e-11) and resolve_options(a).upwind_contact_sweep  # 2D adaptive, Coulomb: on
     r = a.solve(threads=1)
     assert r.extra["upwind_contact_sweep"] is True
     asked = hertz_problem("triangle", 5, 2.0, coulomb_at_zero=True,

@@ -309,7 +309,7 @@ def read_model(path) -> Model:
         steps = steps_table.integer("count", 1, 1, MAX_STEPS)
         steps_table.done()
     options = _read_solver(top.table("solver", [f.name for f in SolverOptions.__dataclass_fields__.values()]))
-    if steps > 1 and options.method not in PATH_METHODS:
+    if steps > 1 and options.method is not None and options.method not in PATH_METHODS:
         raise ModelError(file, "solver.method", f"load steps (steps.count = {steps}) are solved by one of "
                                                 f"{', '.join(PATH_METHODS)}, got {options.method!r}")
     outputs = _read_outputs(top.table("output", ("vtu", "pvd", "json", "plot", "summary")), base, dims.pop())

@@ -33,7 +33,7 @@ def solve_model(model: Model):
     t0 = time.perf_counter()
     if model.steps > 1:
         path = LoadPath.proportional(model.problem, model.steps)
-        results = path.solve(model.options.method, model.options).steps
+        results = path.solve(model.options.method or "nmg", model.options).steps
     else:
         res = Solver(model.problem, model.options).solve()
         res.extra.update(step=1, parameter=1.0)
@@ -66,7 +66,7 @@ def model_report(model: Model, results, seconds: float) -> dict:
                     "cells": int(b.mesh.num_cells)} for b in model.bodies],
         "levels": max(b.levels for b in model.bodies),
         "nodes": int(p.mesh.num_points), "dofs": int(p.mesh.num_points * p.mesh.dim),
-        "method": model.options.method, "law": p.law, "friction": model.friction,
+        "method": res.method, "law": p.law, "friction": model.friction,
         "tol": model.options.stop[0], "rtol": model.options.stop[1],
         "converged": converged, "status": res.status, "cycles": res.cycles,
         "cycles_per_step": [int(r.cycles) for r in results],

@@ -9,6 +9,13 @@ import numpy as np
 CELL_NODES = {"triangle": 3, "quad": 4, "tetra": 4, "hexahedron": 8}
 CELL_DIM = {"triangle": 2, "quad": 2, "tetra": 3, "hexahedron": 3}
 FACET_NODES = {"triangle": 2, "quad": 2, "tetra": 3, "hexahedron": 4}
+# the edges of each cell type (VTK node order)
+CELL_EDGES = {
+    "triangle": [(0, 1), (1, 2), (2, 0)],
+    "quad": [(0, 1), (1, 2), (2, 3), (3, 0)],
+    "tetra": [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)],
+    "hexahedron": [(0, 1), (1, 2), (2, 3), (3, 0), (4, 5), (5, 6), (6, 7), (7, 4), (0, 4), (1, 5), (2, 6), (3, 7)],
+}
 
 # local facets of each cell type, ordered so that the outward normal follows (VTK node order)
 _LOCAL_FACETS = {

@@ -22,7 +22,7 @@ class ContactProblem(Problem):
                  contact_tags: Sequence[int] = (), obstacle=None, friction=None,
                  body_force: Optional[VectorField] = None, traction: Optional[Dict[int, VectorField]] = None,
                  cycle: str = "F", nu1: int = 3, nu2: int = 3):
-        self.default_options = SolverOptions(cycle=cycle, nu1=nu1, nu2=nu2, tol=PAPER_TOL)
+        self.default_options = SolverOptions(method="nmg", cycle=cycle, nu1=nu1, nu2=nu2, tol=PAPER_TOL)
         super().__init__(Body(hierarchy, material, dirichlet, contact_tags, body_force, traction), obstacle, friction)
 
 
@@ -35,7 +35,7 @@ class MultiBodyProblem(Problem):
         bodies = list(bodies) if not isinstance(bodies, Body) else [bodies]
         if len(bodies) < 2 or not all(isinstance(b, Body) for b in bodies):
             raise TypeError("bodies must be a sequence of at least two Body")
-        self.default_options = SolverOptions(cycle=cycle, nu1=nu1, nu2=nu2, tol=PAPER_TOL)
+        self.default_options = SolverOptions(method="nmg", cycle=cycle, nu1=nu1, nu2=nu2, tol=PAPER_TOL)
         super().__init__(bodies, friction=friction, pairs=pairs, tied_correction=tied_correction)
 
 

@@ -50,8 +50,10 @@ class SolverOptions:
     A field None takes the problem-dependent default that resolve_options(problem, options) fills in;
     result.options reports the values used."""
 
-    method: str = "nmg"
-    """"nmg" (Algorithm 2 for Coulomb friction; truncated monotone multigrid for frictionless and
+    method: Optional[str] = None
+    """None: chosen from the problem (resolve_options: "tnnmg" with its line smoother where Algorithm
+    2's point smoother is slow -- nearly incompressible materials, stretched cells -- else "nmg");
+    "nmg" (Algorithm 2 for Coulomb friction; truncated monotone multigrid for frictionless and
     Tresca; linear multigrid without contact), "tnnmg" (truncated nonsmooth Newton multigrid),
     "fixed-point" (Algorithm 1, Coulomb only) or "linear" (the cost reference: the linear problem with
     the contact state of an nmg solve known in advance)."""
@@ -110,7 +112,7 @@ class SolverOptions:
     the lower memory peak of single solves (0011-memory-release). Fixed when the solver is built."""
 
     def __post_init__(self):
-        if self.method not in METHODS:
+        if self.method is not None and self.method not in METHODS:
             raise ValueError(f"method must be one of {METHODS}, got {self.method!r}")
         if self.cycle not in CYCLES:
             raise ValueError(f"cycle must be one of {CYCLES}, got {self.cycle!r}")
@@ -150,11 +152,11 @@ class SolverOptions:
                 raise ValueError(f"{name} must be True or False, got {v!r}")
         if self.release_hierarchy is None:
             raise ValueError("release_hierarchy must be True or False, got None")
-        if (self.linear is not None or self.lines is not None) and self.method != "tnnmg":
+        if (self.linear is not None or self.lines is not None) and self.method not in (None, "tnnmg"):
             raise ValueError("linear and lines choose the linear correction of method 'tnnmg'")
         if self.linear is not None and self.linear not in LINEAR_CORRECTIONS:
             raise ValueError(f"linear must be one of {LINEAR_CORRECTIONS}, got {self.linear!r}")
-        if self.method not in ("nmg", "linear"):
+        if self.method not in (None, "nmg", "linear"):
             for name in ("petrov_galerkin", "upwind_contact_sweep", "projected_coarse_correction"):
                 if getattr(self, name):
                     raise ValueError(f"{name} is a choice of method 'nmg' (Algorithm 2), not {self.method!r}")
@@ -193,6 +195,8 @@ class SolverOptions:
         for f in dataclasses.fields(self):
             v = getattr(self, f.name)
             if f.name in ("local_smoothing", "release_hierarchy") or v is None:
+                if f.name == "method":
+                    out["method"] = "nmg"  # unresolved (not through resolve_options): the core's default
                 continue
             if f.name in ("petrov_galerkin", "upwind_contact_sweep", "projected_coarse_correction"):
                 if v and self.method == "nmg":
@@ -227,9 +231,10 @@ PAPER_TOL = 1e-11
 
 
 def with_cycle(problem, cycle: str = "F", nu1: int = 3, nu2: int = 3, tol: float = PAPER_TOL):
-    """`problem` with the cycle (cycle, nu1, nu2) and the absolute stop `tol` as the defaults of
-    problem.solve (the paper's benchmarks: F(3,3), 1e-11); returns the problem."""
-    problem.default_options = options_from(problem.default_options).replace(cycle=cycle, nu1=nu1, nu2=nu2, tol=tol)
+    """`problem` with Algorithm 2, the cycle (cycle, nu1, nu2) and the absolute stop `tol` as the
+    defaults of problem.solve (the paper's benchmarks: nmg F(3,3), 1e-11); returns the problem."""
+    problem.default_options = options_from(problem.default_options).replace(method="nmg", cycle=cycle, nu1=nu1,
+                                                                            nu2=nu2, tol=tol)
     return problem
 
 
@@ -247,6 +252,36 @@ def options_from(options=None, **fields) -> SolverOptions:
     return base.replace(**fields) if fields else base
 
 
+# Where the default method turns to TNNMG with line smoothing (0026-default-method): a Poisson ratio
+# from which Algorithm 2's point smoother slows down (nu = 0.49: 41 cycles against TNNMG's 14), and a
+# cell aspect ratio (longest over shortest edge) from which it stalls (aspect 32: 283 against 22).
+STIFF_NU = 0.45
+STRETCHED_ASPECT = 8.0
+
+
+def cell_aspect_ratio(mesh) -> float:
+    """The largest ratio of a cell's longest edge to its shortest over the mesh."""
+    from ..mesh.mesh import CELL_EDGES
+
+    X = mesh.points[mesh.cells]
+    edges = np.stack([np.linalg.norm(X[:, a] - X[:, b], axis=1) for a, b in CELL_EDGES[mesh.cell_type]], axis=1)
+    return float((edges.max(axis=1) / edges.min(axis=1)).max())
+
+
+def default_method(problem) -> str:
+    """The method for a problem whose options name none: "tnnmg" (its line smoother handles what a
+    point smoother does not) for a contact problem of a nearly incompressible material or stretched
+    cells, else "nmg" (Algorithm 2). The paper's benchmarks name "nmg" themselves."""
+    if problem.law == "linear":
+        return "nmg"
+    from ..model.material import cell_moduli
+
+    nu = max(float(cell_moduli(b.hierarchy.finest, b.material)[1].max()) for b in problem.bodies)
+    if nu >= STIFF_NU or cell_aspect_ratio(problem.mesh) >= STRETCHED_ASPECT:
+        return "tnnmg"
+    return "nmg"
+
+
 def resolve_options(problem, options=None) -> SolverOptions:
     """`options` (None: the defaults) with every problem-dependent default (a field None) filled in
     for `problem`: the one place these defaults are decided.
@@ -257,6 +292,8 @@ def resolve_options(problem, options=None) -> SolverOptions:
     projected_coarse_correction: on where a contact frame is rotated; local_smoothing: on for
     adaptive hierarchies; ordering: DEFAULT_ORDERING. Left None: linear and lines (the core's own)."""
     o = options_from(options)
+    if o.method is None:
+        o = o.replace(method=default_method(problem) if o.linear is None and o.lines is None else "tnnmg")
     mesh = problem.mesh
     adaptive_2d = problem.hierarchy.kind == "adaptive" and mesh.dim == 2
     coulomb = problem.friction.law == "coulomb"
