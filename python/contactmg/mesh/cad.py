@@ -439,6 +439,9 @@ class CadProjector:
     (by code that only gives the facet tags) it moves each point to the closest entity of its tag's
     group, which is right inside a face but may leave a node on a CAD edge off the edge."""
 
+    # MeshHierarchy.build relaxes the interior nodes next to the projected ones by default
+    relax = True
+
     def __init__(self, cad: CadModel):
         self.cad = cad
 

@@ -242,10 +242,12 @@ class MeshHierarchy:
 
     @classmethod
     def build(cls, mesh: Mesh, levels: int, projector: Optional[Projector] = None,
-              memory_fraction: float = 0.8, relax: bool = True) -> "MeshHierarchy":
+              memory_fraction: float = 0.8, relax: Optional[bool] = None) -> "MeshHierarchy":
         """Refine `mesh` uniformly until there are `levels` levels in all (level 1 is `mesh`).
         New nodes on boundary facets are passed through `projector(points, tags)` so that they land
-        on a curved boundary (a CadModel's projector() follows the CAD geometry). With `relax`, each
+        on a curved boundary (a CadModel's projector() follows the CAD geometry). With `relax` (None:
+        the projector's own `relax` attribute, True for a CadModel's projector, else False: the
+        analytic projectors' hierarchies stay as they were), each
         new interior node of the cells that touch a projected node takes the mean displacement of
         its neighbours where that raises the smallest quality of its cells (the level's smallest
         quality never drops; on the fillet cylinder it rose from 0.316 to 0.326 after three
@@ -266,6 +268,8 @@ class MeshHierarchy:
                 f"{levels} levels need about {need / 2**30:.1f} GiB ({estimate_nodes(mesh, levels):,} nodes), "
                 f"more than {memory_fraction:.0%} of the {have / 2**30:.1f} GiB available")
         _core.check_cells(mesh.points, mesh.cells, mesh.cell_type)
+        if relax is None:
+            relax = bool(getattr(projector, "relax", False))
         h = cls(*_refine_uniformly(mesh, levels, projector, relax), time.perf_counter() - t0)
         h._recipe = (mesh, projector, bool(relax))
         if projector is not None:
