@@ -176,6 +176,26 @@ def check_engineering_models(res):
     assert len(units) == 3 and max(units) - min(units) <= 2
 
 
+def check_cad_refinement(res):
+    geometry, contact = res["geometry"], res["contact"]
+    assert {r["model"] for r in geometry} == {"fillet cylinder", "torus"}
+    # every new boundary node lies on its CAD surface or curve
+    assert all(r["distance"] < 1e-10 for r in geometry)
+    for model in ("fillet cylinder", "torus"):
+        rows = [r for r in geometry if r["model"] == model and r["coarse mesh"] == "Netgen"]
+        caps = [r for r in geometry if r["model"] == model and r["coarse mesh"] == "gmsh"]
+        assert rows[0]["caps"] == 0 and caps[0]["caps"] > 0
+        # the optimized coarse mesh keeps its quality, the relaxation never lowers it, and gmsh's
+        # mesh with caps degrades faster
+        assert min(r["min quality"] for r in rows) >= 0.5 * rows[0]["min quality"]
+        assert all(r["min quality"] >= r["without relaxation"] for r in rows + caps)
+        assert caps[-1]["min quality"] / caps[0]["min quality"] < rows[-1]["min quality"] / rows[0]["min quality"]
+    assert all(r["converged"] for r in contact) and len(contact) >= 2
+    # level 1 is the same mesh; refined, the faceted body answers differently
+    assert contact[0]["force cad"] == contact[0]["force faceted"]
+    assert abs(contact[-1]["force cad"] - contact[-1]["force faceted"]) > 0.05 * contact[-1]["force cad"]
+
+
 CHECKS = {"paper/table1": check_table1, "paper/hertz_stresses": check_hertz_stresses,
           "paper/algorithm1_vs_2": check_algorithm1_vs_2, "three_d/sphere": check_sphere, "three_d/cork": check_cork,
           "three_d/two_bodies": check_two_bodies, "methods/tnnmg_vs_nmg": check_tnnmg_vs_nmg,
@@ -183,7 +203,8 @@ CHECKS = {"paper/table1": check_table1, "paper/hertz_stresses": check_hertz_stre
           "methods/linear_multigrid": check_linear_multigrid, "methods/cycle_options": check_cycle_options,
           "methods/load_path": check_load_path, "performance/cycle_time": check_cycle_time,
           "performance/threads": check_threads, "performance/memory": check_memory,
-          "performance/skip_work": check_skip_work, "model/engineering_models": check_engineering_models}
+          "performance/skip_work": check_skip_work, "model/engineering_models": check_engineering_models,
+          "model/cad_refinement": check_cad_refinement}
 
 
 def test_every_script_is_checked_and_documented():

@@ -1,9 +1,12 @@
-"""Shape measures of 3D cells, per cell: dihedral angles and the normalized radius ratio of
-tetrahedra, the scaled Jacobian of hexahedra. Used to watch that uniform refinement with boundary
-projection keeps the mesh family non-degenerate."""
+"""Shape measures of cells, per cell: dihedral angles and the normalized radius ratio of
+tetrahedra and triangles, the scaled Jacobian of hexahedra and quadrilaterals; and the smallest of
+them on every level of a hierarchy. Used to watch that uniform refinement with boundary projection
+keeps the mesh family non-degenerate."""
 from __future__ import annotations
 
 import numpy as np
+
+from ..mesh.mesh import _LOCAL_FACETS, unique_rows
 
 _TET_FACES = ((1, 2, 3), (0, 2, 3), (0, 1, 3), (0, 1, 2))  # face i is opposite corner i
 _TET_EDGES = ((0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3))
@@ -54,3 +57,62 @@ def scaled_jacobian(points, cells) -> np.ndarray:
         e = [v / np.linalg.norm(v, axis=1)[:, None] for v in e]
         values.append(np.einsum("ci,ci->c", e[0], np.cross(e[1], e[2])))
     return np.min(values, axis=0)
+
+
+def triangle_radius_ratio(points, cells) -> np.ndarray:
+    """2 sqrt(3) r / h_max per triangle (inradius over longest edge, 1 for the equilateral one)."""
+    X = np.asarray(points, dtype=float)[np.asarray(cells)]
+    if X.ndim != 3 or X.shape[1:] != (3, 2):
+        raise ValueError(f"expected triangles (m, 3) in 2D, got cells of shape {np.shape(cells)}")
+    e = np.linalg.norm(X[:, [1, 2, 0]] - X, axis=2)
+    a, b = X[:, 1] - X[:, 0], X[:, 2] - X[:, 0]
+    area = 0.5 * np.abs(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0])
+    return 2 * np.sqrt(3) * (2 * area / e.sum(axis=1)) / e.max(axis=1)
+
+
+def scaled_jacobian_2d(points, cells) -> np.ndarray:
+    """The smallest corner value of cross(e1, e2) / (|e1||e2|) per quadrilateral (counter-clockwise
+    order; 1 for a rectangle, <= 0 for a folded cell)."""
+    X = np.asarray(points, dtype=float)[np.asarray(cells)]
+    if X.ndim != 3 or X.shape[1:] != (4, 2):
+        raise ValueError(f"expected quadrilaterals (m, 4) in 2D, got cells of shape {np.shape(cells)}")
+    e1 = X[:, [1, 2, 3, 0]] - X
+    e2 = X[:, [3, 0, 1, 2]] - X
+    cross = e1[..., 0] * e2[..., 1] - e1[..., 1] * e2[..., 0]
+    return np.min(cross / (np.linalg.norm(e1, axis=2) * np.linalg.norm(e2, axis=2)), axis=1)
+
+
+_MEASURES = {"tetra": radius_ratio, "hexahedron": scaled_jacobian, "triangle": triangle_radius_ratio,
+             "quad": scaled_jacobian_2d}
+
+
+def cell_quality(mesh) -> np.ndarray:
+    """The shape measure of every cell of a Mesh, 1 for the ideal cell and towards 0 (or below:
+    folded) for a degenerate one: the normalized radius ratio of tetrahedra and triangles, the
+    scaled Jacobian of hexahedra and quadrilaterals."""
+    return _MEASURES[mesh.cell_type](mesh.points, mesh.cells)
+
+
+def hierarchy_quality(hierarchy) -> list:
+    """The smallest cell quality (cell_quality) of every level of a MeshHierarchy, coarse first."""
+    return [float(cell_quality(m).min()) for m in hierarchy.meshes]
+
+
+def boundary_caps(mesh, facet_mask=None) -> int:
+    """The number of cells of a Mesh with two or more facets on the boundary ("caps": on a curved
+    boundary all their nodes lie on the surface, and boundary projection flattens their children at
+    the shared edge on every level). With facet_mask (a bool per boundary facet), only caps with
+    one of their boundary facets in the mask count (the curved ones: caps on planes do not move)."""
+    local = np.array(_LOCAL_FACETS[mesh.cell_type])
+    keys = np.sort(mesh.cells[:, local].reshape(-1, local.shape[1]), axis=1)
+    ref = np.sort(mesh.facets, axis=1)
+    if not len(ref):
+        return 0
+    mask = np.ones(len(ref), bool) if facet_mask is None else np.asarray(facet_mask, bool)
+    if mask.shape != (len(ref),):
+        raise ValueError(f"facet_mask needs one entry per boundary facet ({len(ref)}), got shape {mask.shape}")
+    _, inv = unique_rows(np.vstack([ref, keys]), return_inverse=True)
+    state = np.zeros(inv.max() + 1, np.int8)  # 0 interior, 1 boundary, 2 boundary and in the mask
+    state[inv[:len(ref)]] = 1 + mask
+    s = state[inv[len(ref):]].reshape(-1, len(local))
+    return int(np.sum(((s > 0).sum(axis=1) >= 2) & (s == 2).any(axis=1)))
