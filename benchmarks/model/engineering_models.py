@@ -7,7 +7,7 @@ Per model: dofs, cycles (per step for a load path), the equilibrium of support r
 forces and load (relative), and the largest violation of the contact conditions (relative; the
 independent check of contactmg.results.checks).
 
-Needs gmsh (pip install gmsh). Run: python benchmarks/model/engineering_models.py [--quick]"""
+Meshes by gmsh (a dependency). Run: python benchmarks/model/engineering_models.py [--quick]"""
 from __future__ import annotations
 
 import os

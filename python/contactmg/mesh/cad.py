@@ -4,7 +4,7 @@ new boundary nodes of every refinement onto the CAD surfaces (3D) or curves (2D)
     cad = CadModel("cylinder.step", size=0.2)
     h = MeshHierarchy.build(cad.mesh, 4, projector=cad.projector())
 
-Needs gmsh (pip install gmsh); contactmg itself does not: gmsh is imported when a CadModel is made.
+gmsh is a dependency of the package, imported only when a CadModel is made (importing contactmg does not load it).
 gmsh is one global state per process: a CadModel initializes it if it is not (and finalizes it
 again on close() if it did), and keeps its geometry in a gmsh model of its own name, made current
 whenever it projects; other gmsh models of the process are left as they are."""
