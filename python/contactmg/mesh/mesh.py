@@ -228,6 +228,19 @@ def boundary_facets(cells: np.ndarray, cell_type: str) -> np.ndarray:
     return np.ascontiguousarray(all_f[counts[inverse.ravel()] == 1])
 
 
+def facet_area_vectors(points: np.ndarray, facets: np.ndarray) -> np.ndarray:
+    """Each facet's outward normal times its measure (length in 2D, area in 3D; a quadrilateral as
+    two triangles), for facets ordered as the boundary facets of the cells."""
+    X = points[facets]
+    if points.shape[1] == 2:
+        t = X[:, 1] - X[:, 0]
+        return np.c_[t[:, 1], -t[:, 0]]
+    a = 0.5 * np.cross(X[:, 1] - X[:, 0], X[:, 2] - X[:, 0])
+    if facets.shape[1] == 4:
+        a = a + 0.5 * np.cross(X[:, 2] - X[:, 0], X[:, 3] - X[:, 0])
+    return a
+
+
 def _integer_tags(tags, count: int, what: str = "facet") -> np.ndarray:
     """Facet (or cell) tags as int64; floats are accepted only when they hold integers (NaN is no tag)."""
     tags = np.asarray(tags)
@@ -425,23 +438,12 @@ class Mesh:
 
     def facet_normals(self) -> np.ndarray:
         """The outward unit normals of the boundary facets."""
-        X = self.points[self.facets]
-        if self.dim == 2:
-            t = X[:, 1] - X[:, 0]
-            n = np.c_[t[:, 1], -t[:, 0]]
-        else:
-            n = np.cross(X[:, 1] - X[:, 0], X[:, 2] - X[:, 0])
-        return n / np.linalg.norm(n, axis=1)[:, None]
+        a = facet_area_vectors(self.points, self.facets)
+        return a / np.linalg.norm(a, axis=1)[:, None]
 
     def facet_measures(self) -> np.ndarray:
         """The lengths (2D) or areas (3D) of the boundary facets."""
-        X = self.points[self.facets]
-        if self.dim == 2:
-            return np.linalg.norm(X[:, 1] - X[:, 0], axis=1)
-        area = 0.5 * np.linalg.norm(np.cross(X[:, 1] - X[:, 0], X[:, 2] - X[:, 0]), axis=1)
-        if self.facets.shape[1] == 4:
-            area += 0.5 * np.linalg.norm(np.cross(X[:, 2] - X[:, 0], X[:, 3] - X[:, 0]), axis=1)
-        return area
+        return np.linalg.norm(facet_area_vectors(self.points, self.facets), axis=1)
 
     def cell_measures(self) -> np.ndarray:
         """The areas (2D) or volumes (3D) of the cells."""

@@ -13,6 +13,7 @@ from typing import Optional, Sequence, Tuple
 
 import numpy as np
 
+from ..mesh.mesh import facet_area_vectors
 from ..model.nodal import node_ids, rows_for
 
 
@@ -243,12 +244,7 @@ class MeshObstacle:
             raise ValueError("MeshObstacle facets refer to nodes out of range, or its points are not finite")
         if body_side not in (None, 1, -1):
             raise ValueError(f"body_side must be +1, -1 or None, got {body_side!r}")
-        X = self.points[self.facets]
-        if d == 2:
-            t = X[:, 1] - X[:, 0]
-            n = np.c_[t[:, 1], -t[:, 0]]
-        else:
-            n = np.cross(X[:, 1] - X[:, 0], X[:, 2] - X[:, 0])
+        n = facet_area_vectors(self.points, self.facets)
         length = np.linalg.norm(n, axis=1)
         if np.any(length == 0):
             raise ValueError(f"MeshObstacle facet {int(np.argmax(length == 0))} is degenerate")

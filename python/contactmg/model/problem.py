@@ -25,7 +25,7 @@ import numpy as np
 
 from .. import _core
 from ..mesh.hierarchy import MeshHierarchy, Transfer
-from ..mesh.mesh import Mesh, connected_components
+from ..mesh.mesh import Mesh, connected_components, facet_area_vectors
 from .frames import contact_frames
 from .friction import Coulomb, Frictionless, Tresca
 from .loads import PointLoad, VectorField, assemble_load, field_values, spring_blocks, tag_tuple
@@ -397,8 +397,10 @@ class Problem:
             piece = int(np.bincount(np.asarray(labels)).argmax())
             pulled[sel] = index.get((q.mortar, piece), -1)
         x = self.mesh.points[c.nodes]
-        contacts = [(x[[i]], c.normals[[i]], c.frames[[i]], self.coefficients[[i]], pushed[i], pulled[i])
-                    for i in range(len(c.nodes)) if pushed[i] >= 0 or pulled[i] >= 0]
+        contacts = []
+        for a, b in sorted({(int(a), int(b)) for a, b in zip(pushed, pulled) if a >= 0 or b >= 0}):
+            sel = (pushed == a) & (pulled == b)
+            contacts.append((x[sel], c.normals[sel], c.frames[sel], self.coefficients[sel], a, b))
         check_held(motions, work, contacts, self.law)
 
     def _check_held_by_contact(self, floating: list) -> None:
@@ -785,32 +787,27 @@ def _union_mesh(meshes: Sequence[Mesh], offsets: np.ndarray) -> Mesh:
                          np.concatenate([m.cell_tags for m in meshes]))
 
 
+def _items(value, types: tuple, message: str) -> list:
+    """None, one item of `types` or a sequence of them, as a list (TypeError `message` otherwise)."""
+    if value is None:
+        return []
+    if isinstance(value, types):
+        return [value]
+    try:
+        items = list(value)
+    except TypeError:
+        raise TypeError(message) from None
+    for item in items:
+        if not isinstance(item, types):
+            raise TypeError(f"{message}, got {type(item).__name__}")
+    return items
+
+
 def _split_contacts(bodies, obstacle, pairs, contacts):
     """(obstacle contacts, pairs) of the problem's arguments: `contacts` (ObstacleContact and
     ContactPair) and the short forms (`obstacle` with the bodies' contact_tags, `pairs`)."""
-    if contacts is None:
-        contacts = []
-    elif isinstance(contacts, (ObstacleContact, ContactPair)):
-        contacts = [contacts]
-    else:
-        try:
-            contacts = list(contacts)
-        except TypeError:
-            raise TypeError("contacts must be a sequence of ObstacleContact and ContactPair") from None
-    for c in contacts:
-        if not isinstance(c, (ObstacleContact, ContactPair)):
-            raise TypeError(f"contacts must hold ObstacleContact and ContactPair, got {type(c).__name__}")
-    if pairs is None:
-        pairs = []
-    elif isinstance(pairs, ContactPair):
-        pairs = [pairs]
-    else:
-        try:
-            pairs = list(pairs)
-        except TypeError:
-            raise TypeError("pairs must be a ContactPair or a non-empty sequence of ContactPair") from None
-    if not all(isinstance(q, ContactPair) for q in pairs):
-        raise TypeError("pairs must be a ContactPair or a non-empty sequence of ContactPair")
+    contacts = _items(contacts, (ObstacleContact, ContactPair), "contacts must hold ObstacleContact and ContactPair")
+    pairs = _items(pairs, (ContactPair,), "pairs must be a ContactPair or a non-empty sequence of ContactPair")
     pairs = pairs + [c for c in contacts if isinstance(c, ContactPair)]
     obstacles = [c for c in contacts if isinstance(c, ObstacleContact)]
     tagged = [k for k, b in enumerate(bodies) if len(b.contact_tags)]
@@ -847,16 +844,8 @@ def _body_normals(mesh, facets: np.ndarray, nodes: np.ndarray):
     """(outward unit normal (m, d), mean facet size (m,), facet measure around (m,)) of the body at
     the `nodes` (ascending) from its contact `facets`."""
     d = mesh.dim
-    X = mesh.points[facets]
-    if d == 2:
-        t = X[:, 1] - X[:, 0]
-        fn = np.c_[t[:, 1], -t[:, 0]]                       # outward normal times length
-        size = np.linalg.norm(t, axis=1)
-    else:
-        fn = 0.5 * np.cross(X[:, 1] - X[:, 0], X[:, 2] - X[:, 0])
-        if facets.shape[1] == 4:
-            fn = fn + 0.5 * np.cross(X[:, 2] - X[:, 0], X[:, 3] - X[:, 0])
-        size = np.sqrt(np.linalg.norm(fn, axis=1))
+    fn = facet_area_vectors(mesh.points, facets)             # outward normal times measure
+    size = np.linalg.norm(fn, axis=1) ** (1.0 / (d - 1))     # a length: the edge, or the root of the area
     pos = np.searchsorted(nodes, facets)
     pos = np.minimum(pos, len(nodes) - 1)
     hit = nodes[pos] == facets

@@ -67,27 +67,27 @@ def describe(x: np.ndarray, coeff: np.ndarray) -> str:
     return text
 
 
-def _generators(normals: np.ndarray, frames: np.ndarray, law: str, coefficients: np.ndarray) -> list:
-    """Per contact node the directions (d,) of the forces its obstacle can exert on the body, whose
-    non-negative combinations are those forces: -n (pressure), with Coulomb friction the edges of a
-    pyramid around the cone |s_T| <= F |s_n| that contains it (so a load refused is one no friction
-    force can balance), with Tresca friction +-t (its bound is not proportional to the pressure)."""
+def _generators(normals: np.ndarray, frames: np.ndarray, law: str, coefficients: np.ndarray) -> np.ndarray:
+    """The directions (nc, g, d) of the forces each contact node's obstacle can exert on the body,
+    whose non-negative combinations are those forces: -n (pressure), with Coulomb friction the
+    edges of a pyramid around the cone |s_T| <= F |s_n| that contains it (so a load refused is one
+    no friction force can balance), with Tresca friction +-t (its bound is not proportional to the
+    pressure). A node without friction repeats -n in the friction columns."""
+    n = -normals[:, None, :]                                  # (nc, 1, d)
+    tang = np.swapaxes(frames[:, :, 1:], 1, 2)                # (nc, d - 1, d)
     d = normals.shape[1]
-    out = []
-    for i in range(len(normals)):
-        n, tang = -normals[i], frames[i][:, 1:].T
-        gens = [n]
-        if law == "coulomb" and coefficients[i] > 0:
-            if d == 2:
-                gens += [n + coefficients[i] * tang[0], n - coefficients[i] * tang[0]]
-            else:
-                m = 8
-                f = coefficients[i] / np.cos(np.pi / m)
-                gens += [n + f * (np.cos(a) * tang[0] + np.sin(a) * tang[1]) for a in 2 * np.pi * np.arange(m) / m]
-        elif law == "tresca":
-            gens += [s * t for t in tang for s in (1.0, -1.0)]
-        out.append(gens)
-    return out
+    if law == "coulomb":
+        if d == 2:
+            dirs = np.stack([tang[:, 0], -tang[:, 0]], axis=1)            # (nc, 2, d)
+            F = coefficients
+        else:
+            angles = 2 * np.pi * np.arange(8) / 8
+            dirs = np.cos(angles)[None, :, None] * tang[:, :1] + np.sin(angles)[None, :, None] * tang[:, 1:2]
+            F = coefficients / np.cos(np.pi / 8)
+        return np.concatenate([n, n + F[:, None, None] * dirs], axis=1)
+    if law == "tresca":
+        return np.concatenate([n, tang, -tang], axis=1)
+    return n
 
 
 class FreeMotion:
@@ -129,14 +129,13 @@ def check_held(motions: list, load_work: list, contacts: list, law: str) -> None
         if pulled >= 0:
             U[:, :, offsets[pulled]:offsets[pulled + 1]] -= motions[pulled].at(points)
         normal_rows.append(np.einsum("cdk,cd->ck", U, normals))
-        for i, gens in enumerate(_generators(normals, frames, law, coefficients)):
-            cols += [U[i].T @ g for g in gens]
+        cols.append(np.einsum("cdk,cgd->kcg", U, _generators(normals, frames, law, coefficients)).reshape(K, -1))
 
     def name(c):
         j = int(np.argmax([np.linalg.norm(c[offsets[a]:offsets[a + 1]]) for a in range(len(motions))]))
         return motions[j].describe(c[offsets[j]:offsets[j + 1]])
 
-    G = np.array(cols).T if cols else np.zeros((K, 0))
+    G = np.hstack(cols) if cols else np.zeros((K, 0))
     normal_motion = np.vstack(normal_rows) if normal_rows else np.zeros((0, K))
     # a free motion that moves no contact node along its normal: only friction can fix it
     if law == "frictionless":
