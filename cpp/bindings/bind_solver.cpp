@@ -48,6 +48,7 @@ py::dict result_to_dict(SolveResult& R, const ContactSolver<d>& S) {
   out["seconds"] = R.seconds;
   out["rebuild_seconds"] = R.rebuild_seconds;
   out["sweep_check"] = R.sweep_check;
+  out["switched_at"] = R.switched_at;
   py::dict phases;
   for (int k = 0; k < (int)Phase::Count; ++k) phases[phase_name(k)] = R.phase_seconds[k];
   out["phase_seconds"] = phases;

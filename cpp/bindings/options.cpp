@@ -52,7 +52,7 @@ SolverOptions options_from_dict(py::handle options, SolverOptions o) {
         static const char* known[] = {"method", "cycle", "nu1", "nu2", "tol", "rtol", "max_cycles", "omega", "omega_post",
                                       "fixed_point_tol", "fixed_point_max", "fixed_point_stall_window", "linear", "lines",
                                       "threads", "ordering", "petrov_galerkin", "upwind_contact_sweep",
-                                      "projected_coarse_correction"};
+                                      "projected_coarse_correction", "switch_rate"};
         if (std::find_if(std::begin(known), std::end(known), [&](const char* q) { return k == q; }) == std::end(known))
           throw InputError("unknown option '" + k + "'");
         continue;
@@ -76,6 +76,7 @@ SolverOptions options_from_dict(py::handle options, SolverOptions o) {
       else if (k == "petrov_galerkin") o.petrov_galerkin = bool_option(v, n);
       else if (k == "upwind_contact_sweep") o.upwind_contact_sweep = bool_option(v, n);
       else if (k == "projected_coarse_correction") o.projected_coarse_correction = bool_option(v, n);
+      else if (k == "switch_rate") o.switch_rate = real_option(v, n);
       else throw InputError("unknown option '" + k + "'");
     }
   }
@@ -93,6 +94,7 @@ py::dict options_to_dict(const SolverOptions& o) {
   out["lines"] = o.lines; out["threads"] = o.threads; out["ordering"] = ordering_name(o.ordering);
   out["petrov_galerkin"] = o.petrov_galerkin; out["upwind_contact_sweep"] = o.upwind_contact_sweep;
   out["projected_coarse_correction"] = o.projected_coarse_correction;
+  out["switch_rate"] = o.switch_rate;
   return out;
 }
 

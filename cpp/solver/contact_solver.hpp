@@ -176,9 +176,16 @@ class ContactSolver {
       P_.set_bounds_to_coefficients();
       P_.set_smoothing_omega(cyc.omega);
       SolveResult R;
+      // TNNMG takes no slip origin (load paths) and has nothing to add without contact
+      const bool may_switch = cyc.switch_rate > 0 && Law::has_contact && !P_.has_slip_origin();
       {
         MonotoneMultigridStep<d, Law> step(P_, H_, C_, built_, it_, cyc, fine_order(cyc.ordering), tied_.get(), workspace());
-        run_loop(step, cyc, reference, mon_, R, 0);
+        run_loop(step, cyc, reference, mon_, R, 0, may_switch);
+      }
+      if (R.status == kSwitchStatus) {  // the same iterate, the same stop: TNNMG steps from here
+        R.switched_at = R.cycles;
+        TnnmgStep<d, Law> step(P_, H_, C_, built_, it_, cyc, fine_cycle(), fine_order(cyc.ordering));
+        run_loop(step, cyc, reference, mon_, R, 0, false, true);
       }
       finish<Law>(R);
       return R;

@@ -26,13 +26,30 @@ inline std::string fmt3(double v) {
   return buf;
 }
 
-// Returns whether it converged; R gets the history, the cycle count and the status.
+// The status run_loop leaves when the contraction asks for another step (switch_rate).
+inline const char* kSwitchStatus = "switch";
+
+// Whether the last kSwitchWindow corrections of R contract by less than `rate` per cycle.
+inline bool contracts_slowly(const SolveResult& R, double rate) {
+  const std::size_t n = R.history.size();
+  if (rate <= 0 || n < (std::size_t)std::max(kSwitchFrom, kSwitchWindow + 1)) return false;
+  const double now = R.history[n - 1].correction_norm, before = R.history[n - 1 - kSwitchWindow].correction_norm;
+  return before > 0 && now > std::pow(rate, kSwitchWindow) * before;
+}
+
+// Returns whether it converged; R gets the history, the cycle count and the status. With
+// switch_rate > 0 (and `may_switch`) it returns early with status kSwitchStatus when the
+// corrections contract slowly; a run_loop that `goes_on` after it keeps the relative stop's scale
+// and counts its cycles against the same max_cycles (a new loop, as each Tresca solve of
+// Algorithm 1, starts both afresh).
 // reference: the canonical u* (storage order) whose error ||u - u*||_A each cycle records, or nullptr.
 template <class Step>
-bool run_loop(Step& step, const SolverOptions& opt, const double* reference, Monitor& mon, SolveResult& R, int outer) {
-  double first = -1;
+bool run_loop(Step& step, const SolverOptions& opt, const double* reference, Monitor& mon, SolveResult& R, int outer,
+              bool may_switch = false, bool goes_on = false) {
+  if (!goes_on) R.first_correction = -1;
+  double& first = R.first_correction;
   R.status = "no convergence in " + std::to_string(opt.max_cycles) + " cycles";
-  for (int it = 1; it <= opt.max_cycles; ++it) {
+  for (int it = goes_on ? R.cycles + 1 : 1; it <= opt.max_cycles; ++it) {
     mon.check_interrupt();
     CycleRecord rec;
     rec.correction_norm = step.iterate(mon.phases(), rec.rebuilt);
@@ -79,6 +96,10 @@ bool run_loop(Step& step, const SolverOptions& opt, const double* reference, Mon
       R.converged = true;
       R.status = "converged";
       return true;
+    }
+    if (may_switch && contracts_slowly(R, opt.switch_rate)) {
+      R.status = kSwitchStatus;
+      return false;
     }
   }
   R.converged = false;

@@ -43,6 +43,10 @@ struct SolveResult {
   double seconds = 0, rebuild_seconds = 0;
   double sweep_check = std::numeric_limits<double>::quiet_NaN();  // ||S(u) - u||_A at the stop
   std::vector<double> phase_seconds;  // indexed by Phase
+  // the first cycle's correction norm (the relative stop's scale; a loop that goes on with another
+  // step keeps it), -1 before the first cycle
+  double first_correction = -1;
+  int switched_at = 0;  // the last Algorithm 2 cycle before TNNMG took over (switch_rate), 0: none
 };
 
 }  // namespace cmg

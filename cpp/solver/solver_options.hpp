@@ -59,6 +59,9 @@ inline const char* linear_correction_name(LinearCorrection c) {
 // (triangles levels 3-7, quads 3-6, F = 0.4 and 5) 10, 50, 200 and 2000 gave the same cycle
 // counts, and 2000 (run to a relative change of 1e-14) cost 84 % of a quad level-3 solve.
 constexpr int kCoarsestMaxSweeps = 50;
+// The switch to TNNMG (switch_rate) looks at the contraction of the last kSwitchWindow cycles, from
+// cycle kSwitchFrom on (the first cycles settle the contact set and contract unevenly).
+constexpr int kSwitchFrom = 5, kSwitchWindow = 3;
 // A correction this many times larger than the first one ends a solve as diverged.
 constexpr double kDivergenceFactor = 1e8;
 
@@ -117,6 +120,12 @@ struct SolverOptions {
   // holds back the coarse motions around it (docs/dev/decisions/0008-projected-coarse-correction.md).
   // Every step still lowers the frozen energy.
   bool projected_coarse_correction = false;
+  // Algorithm 2 only: when > 0, a solve whose corrections contract by less than this per cycle
+  // (their geometric mean ratio over kSwitchWindow cycles, from cycle kSwitchFrom on) goes on with
+  // TNNMG steps from its iterate, in the same loop and under the same stop. The monotone coarse
+  // obstacles of coarse spaces made from a fine mesh alone hold back some coarse corrections
+  // (docs/dev/decisions/0029-geometric-coarsening.md); TNNMG's linear correction has none.
+  double switch_rate = 0;
 
   double post_omega() const { return omega_post > 0 ? omega_post : omega; }
 
@@ -137,10 +146,13 @@ struct SolverOptions {
     if (fixed_point_max < 1) throw InputError("fixed_point_max must be at least 1");
     if (fixed_point_stall_window < 0) throw InputError("fixed_point_stall_window must be >= 0 (0: off)");
     if (threads < 0) throw InputError("threads must be >= 0 (0: all cores)");
+    if (!(switch_rate >= 0 && switch_rate < 1)) throw InputError("switch_rate must lie in [0, 1) (0: off)");
     const char* cycle_choice = petrov_galerkin ? "petrov_galerkin"
                                : upwind_contact_sweep ? "upwind_contact_sweep"
                                : projected_coarse_correction ? "projected_coarse_correction"
                                                              : nullptr;
+    if (switch_rate > 0 && method != Method::Nmg)
+      throw InputError(std::string("switch_rate: the switch to TNNMG is taken from method nmg, not ") + method_name(method));
     if (cycle_choice && method != Method::Nmg)
       throw InputError(std::string(cycle_choice) + " is a choice of the monotone multigrid cycle (method nmg), not " +
                        method_name(method));

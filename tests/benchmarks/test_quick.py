@@ -196,6 +196,24 @@ def check_cad_refinement(res):
     assert abs(contact[-1]["force cad"] - contact[-1]["force faceted"]) > 0.05 * contact[-1]["force cad"]
 
 
+def check_one_mesh(res):
+    fam = res["families"]
+    assert {r["family"] for r in fam} == {"hertz", "sphere"}
+    for r in fam:  # every coarse space finds the geometric hierarchy's answer
+        assert r["converged"] and r["difference"] < 1e-8, r
+    for r in fam:
+        if r["space"] == "coarsening":  # the default from one mesh: close to the geometric cycles
+            geo = next(g for g in fam if g["family"] == r["family"] and g["size"] == r["size"] and g["space"] == "geometric")
+            assert r["cycles"] <= min(30, geo["cycles"] + 3), r
+    assert [r["method"] for r in res["fillet"]] == ["nmg", "tnnmg"]
+    assert all(r["converged"] and r["cycles"] <= 30 and r["levels"] >= 2 for r in res["fillet"])
+    # with no option given every stress case converges, on every coarse space
+    for r in res["stress"]:
+        assert r["converged"] and r["difference"] < 1e-6, r
+        if r["asked"] == "default":
+            assert r["cycles"] <= 30, r
+
+
 CHECKS = {"paper/table1": check_table1, "paper/hertz_stresses": check_hertz_stresses,
           "paper/algorithm1_vs_2": check_algorithm1_vs_2, "three_d/sphere": check_sphere, "three_d/cork": check_cork,
           "three_d/two_bodies": check_two_bodies, "methods/tnnmg_vs_nmg": check_tnnmg_vs_nmg,
@@ -204,7 +222,7 @@ CHECKS = {"paper/table1": check_table1, "paper/hertz_stresses": check_hertz_stre
           "methods/load_path": check_load_path, "performance/cycle_time": check_cycle_time,
           "performance/threads": check_threads, "performance/memory": check_memory,
           "performance/skip_work": check_skip_work, "model/engineering_models": check_engineering_models,
-          "model/cad_refinement": check_cad_refinement}
+          "model/cad_refinement": check_cad_refinement, "model/one_mesh": check_one_mesh}
 
 
 def test_every_script_is_checked_and_documented():

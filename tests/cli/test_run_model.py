@@ -243,6 +243,8 @@ def test_the_base_of_the_bad_models_is_good(tmp_path, capsys):
     ("[friction]", '[[pair]]\nnonmortar = "block"\nmortar = "block"\nnonmortar_tags = [1]\nmortar_tags = [3]\n'
                    'search = 0.1\n[friction]', "pair[0].mortar", ["two different bodies"]),
     ("tol = 1e-10", "tol = 1e-10\n[solver.extra]", "solver.extra", ["unknown key"]),
+    ("levels = 2", 'levels = 2\nhierarchy = "coarsening"', "body[0].hierarchy", ["levels must be 1"]),
+    ("levels = 2", 'levels = 1\nhierarchy = "algebraic"', "body[0].hierarchy", ["must be one of refine, coarsening"]),
     ("[friction]", "[friction\n", None, ["not valid TOML"]),
 ])
 def test_bad_model_exits_2_with_one_line_naming_file_and_key(tmp_path, capsys, old, new, key, words):
@@ -572,3 +574,28 @@ def test_fillet_cylinder_on_a_tilted_plane(tmp_path, capsys):
     assert rep["check_max"] < 1e-8 and rep["stick_nodes"] > 0
     vtu = meshio.read(d / "out" / "cylinder.vtu")
     assert np.all(vtu.points[vtu.point_data["node_state"] > 0][:, 0] > 0)
+
+
+@pytest.mark.parametrize("kind", ["coarsening", "aggregation"])
+def test_a_fine_mesh_alone_from_the_model_file(tmp_path, capsys, kind):
+    """The block's mesh refined three times, written out and given as the fine mesh alone: the coarse
+    levels are made from it, and the answer is the refined hierarchy's on the same mesh."""
+    from contactmg.mesh.io import write_mesh
+
+    d = example("block_2d", tmp_path)
+    write_mesh(d / "fine.msh", MeshHierarchy.build(read_mesh(d / "block.msh"), 4).finest)
+    text = (d / "block.toml").read_text()
+    assert "levels = 4" in text and 'mesh = "block.msh"' in text
+    (d / "fine.toml").write_text(text.replace('mesh = "block.msh"', 'mesh = "fine.msh"')
+                                 .replace("levels = 4", f'levels = 1\nhierarchy = "{kind}"'))
+    rc, out, err = run_main(capsys, d / "fine.toml", "--json", "-", "-q")
+    assert rc == 0, err
+    rep = json.loads(out)
+    rc, ref_out, err = run_main(capsys, d / "block.toml", "--json", "-", "-q")
+    ref = json.loads(ref_out)
+    assert rep["bodies"][0]["hierarchy"] == kind and ref["bodies"][0]["hierarchy"] == "refine"
+    assert rep["multigrid_levels"] >= 2 and rep["nodes"] == ref["nodes"]
+    assert rep["converged"] and max(rep["cycles_per_step"]) <= 30
+    # the same mesh, the same law of statics, the same answer
+    f, g = np.asarray(rep["contact_forces"]["obstacle"]), np.asarray(ref["contact_forces"]["obstacle"])
+    assert np.abs(f - g).max() <= 1e-6 * np.abs(g).max()

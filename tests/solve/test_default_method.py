@@ -50,3 +50,41 @@ def test_the_choice_agrees_with_algorithm_2s_answer():
     nmg = p.solve("nmg", tol=0.0, rtol=1e-12)
     assert auto.method == "tnnmg"
     assert np.abs(auto.displacement - nmg.displacement).max() <= 1e-7 * np.abs(nmg.displacement).max()
+
+
+def test_algorithm_2_goes_on_with_tnnmg_where_coarse_levels_from_a_mesh_contract_slowly():
+    """The cork's 4-layer mesh, its coarse levels made from it: Algorithm 2's corrections contract
+    slowly there, the solve goes on with TNNMG from its iterate under the same stop, and finds the
+    answer of Algorithm 2 alone in fewer cycles."""
+    from contactmg.examples.cork import cork_problem
+
+    geo = cork_problem(2, 0.4, axial_layers=4)
+    b = geo.bodies[0]
+    p = cm.Problem(cm.Body(cm.MeshHierarchy.coarsened(geo.mesh), b.material, b.dirichlet, contact_tags=b.contact_tags),
+                   obstacle=geo.obstacle, friction=geo.friction)
+    auto = p.solve()
+    alone = p.solve(switch_rate=0)
+    assert auto.options["switch_rate"] == 0.5 and alone.options["switch_rate"] == 0
+    assert auto.converged and alone.converged
+    after = auto.extra.get("switched_to_tnnmg_after")
+    assert after is not None and 5 <= after < auto.cycles < alone.cycles
+    c = alone.history["correction_norm"]
+    # the switch came when Algorithm 2's last three corrections had contracted by less than 0.5 each
+    assert c[after - 1] > 0.5 ** 3 * c[after - 4]
+    assert np.abs(auto.displacement - alone.displacement).max() <= 1e-7 * np.abs(alone.displacement).max()
+    assert contact_conditions(p, auto)["max"] < 1e-6
+    assert "then tnnmg after cycle" in auto.summary()
+
+
+def test_the_switch_is_off_where_the_method_is_given_or_the_levels_are_refined():
+    geo = hertz.hertz_problem("triangle", 4, 0.4)   # a refined hierarchy: no switch
+    assert cm.resolve_options(geo, cm.SolverOptions()).switch_rate == 0
+    b = geo.bodies[0]
+    p = cm.Problem(cm.Body(cm.MeshHierarchy.coarsened(geo.mesh), b.material, b.dirichlet, contact_tags=b.contact_tags),
+                   obstacle=geo.obstacle, friction=geo.friction)
+    assert cm.resolve_options(p, cm.SolverOptions()).switch_rate == 0.5
+    assert cm.resolve_options(p, cm.SolverOptions(method="nmg")).switch_rate == 0
+    with pytest.raises(ValueError, match="switch_rate is a choice of method 'nmg'"):
+        cm.SolverOptions(method="tnnmg", switch_rate=0.5)
+    with pytest.raises(ValueError, match=r"switch_rate must be a number in \[0, 1\)"):
+        cm.SolverOptions(switch_rate=1.0)

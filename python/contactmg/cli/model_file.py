@@ -34,11 +34,15 @@ from .common import MAX_LEVELS, PLOT_SUFFIXES
 
 MAX_STEPS = 100000
 TOP_KEYS = ("description", "body", "obstacle", "pair", "friction", "steps", "solver", "output")
-BODY_KEYS = ("name", "mesh", "levels", "material", "materials", "dirichlet", "traction", "pressure", "spring",
+BODY_KEYS = ("name", "mesh", "levels", "hierarchy", "material", "materials", "dirichlet", "traction", "pressure", "spring",
              "point_load", "body_force", "gravity")
 OBSTACLE_TYPES = ("plane", "sphere", "cylinder", "mesh")
 FRICTION_LAWS = ("frictionless", "coulomb", "tresca")
 PATH_METHODS = ("nmg", "fixed-point")
+# how a body's levels are made: "refine" the mesh (the coarse level; levels below it by geometric
+# coarsening where it is large or alone), or take it as the fine level with coarse levels made from it
+# by "coarsening" (mesh/coarsening.py) or "aggregation" (mesh/aggregation.py)
+HIERARCHIES = ("refine", "coarsening", "aggregation")
 
 
 class ModelError(ValueError):
@@ -68,13 +72,14 @@ class Outputs:
 
 @dataclass
 class BodyInfo:
-    """What the report says of a body: its name, mesh file (as given), levels, finest mesh and its
-    Dirichlet conditions' tags in file order."""
+    """What the report says of a body: its name, mesh file (as given), levels, finest mesh and how
+    its hierarchy was made (refine, coarsening, aggregation)."""
 
     name: str
     mesh_file: str
     levels: int
     mesh: Mesh
+    hierarchy: str = "refine"
 
 
 @dataclass
@@ -334,6 +339,10 @@ def _read_body(t: _Table, base: str):
     except ValueError as e:
         raise t.error("mesh", str(e)) from None
     levels = t.integer("levels", 1, 1, MAX_LEVELS)
+    kind = t.string("hierarchy", "refine", choices=HIERARCHIES)
+    if kind != "refine" and levels != 1:
+        raise t.error("hierarchy", f'"{kind}" takes the mesh as the fine level and makes the coarse levels from it: '
+                                   f"levels must be 1 (refinement makes levels from a coarse mesh), got {levels}")
     d = mesh.dim
     material = _read_material(t, mesh)
     dirichlet = []
@@ -376,13 +385,15 @@ def _read_body(t: _Table, base: str):
                                                                             else " of every region"))
     t.done()
     try:
-        hierarchy = MeshHierarchy.build(mesh, levels)
+        hierarchy = {"refine": lambda: MeshHierarchy.build(mesh, levels),
+                     "coarsening": lambda: MeshHierarchy.coarsened(mesh),
+                     "aggregation": lambda: MeshHierarchy.aggregated(mesh)}[kind]()
     except ValueError as e:
         raise t.error("mesh", str(e)) from None
     # the obstacle's contact tags are set when the obstacles are read (they name the body)
     body = Body(hierarchy, material, dirichlet, body_force=body_force, traction=traction or None,
                 pressure=pressure or None, springs=springs or None, point_loads=point_loads, gravity=gravity)
-    return body, BodyInfo(name, mesh_file, levels, hierarchy.finest)
+    return body, BodyInfo(name, mesh_file, levels, hierarchy.finest, kind)
 
 
 def _per_tag(t: _Table, name: str, key: str, mesh: Mesh, mesh_file: str, read) -> dict:

@@ -62,9 +62,11 @@ def model_report(model: Model, results, seconds: float) -> dict:
     return {
         "command": "run", "model": model.path, "description": model.description, "dim": p.mesh.dim,
         "cell": p.mesh.cell_type,
-        "bodies": [{"name": b.name, "mesh": b.mesh_file, "levels": b.levels, "nodes": int(b.mesh.num_points),
-                    "cells": int(b.mesh.num_cells)} for b in model.bodies],
+        "bodies": [{"name": b.name, "mesh": b.mesh_file, "levels": b.levels, "hierarchy": b.hierarchy,
+                    "nodes": int(b.mesh.num_points), "cells": int(b.mesh.num_cells)} for b in model.bodies],
         "levels": max(b.levels for b in model.bodies),
+        # the levels the solver's cycle runs on: with those made below the mesh (problem.notes says why)
+        "multigrid_levels": len(p.transfers) + 1, "notes": list(p.notes),
         "nodes": int(p.mesh.num_points), "dofs": int(p.mesh.num_points * p.mesh.dim),
         "method": res.method, "law": p.law, "friction": model.friction,
         "tol": model.options.stop[0], "rtol": model.options.stop[1],

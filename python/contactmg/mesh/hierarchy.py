@@ -51,6 +51,18 @@ def bytes_per_node(mesh: Mesh) -> int:
     return _BYTES_PER_NODE[mesh.cell_type]
 
 
+# kinds of hierarchy whose coarse levels were made from the fine mesh alone (no coarse meshes)
+FINE_MESH_KINDS = ("coarsening", "aggregation")
+
+
+def _transfer_of(P) -> "Transfer":
+    """A Transfer from a scipy sparse prolongation (fine x coarse)."""
+    P = P.tocsr()
+    P.sort_indices()
+    return Transfer(P.shape[0], P.shape[1], P.indptr.astype(np.int64), P.indices.astype(np.int64),
+                    P.data.astype(float))
+
+
 @dataclass
 class Transfer:
     """Nodal interpolation from one level to the next: fine node i is the sum of
@@ -240,28 +252,50 @@ class MeshHierarchy:
         """The number of levels."""
         if self._meshes is None:
             return self._levels
-        return len(self._transfers) + 1 if self.kind == "aggregation" else len(self._meshes)
+        return len(self._transfers) + 1 if self.from_fine_mesh else len(self._meshes)
+
+    @classmethod
+    def coarsened(cls, mesh: Mesh, coarsest: int = 200) -> "MeshHierarchy":
+        """Coarse levels made from the fine `mesh` alone by geometric coarsening
+        (mesh/coarsening.py): nested node sets chosen from the mesh's nodes, the boundary's edges
+        and corners first, interpolated by barycentric coordinates in their Delaunay simplices,
+        down to at most `coarsest` nodes. For a mesh as it comes from a mesher, with no coarse
+        mesh to refine; the default of a fine mesh alone (0028-geometric-coarsening). The
+        hierarchy holds the fine mesh and the transfers (kind "coarsening")."""
+        from .coarsening import coarsening_prolongations
+
+        return cls._from_fine(mesh, "coarsening", lambda: coarsening_prolongations(mesh, coarsest=coarsest))
 
     @classmethod
     def aggregated(cls, mesh: Mesh, coarsest: int = 200, omega: float = 1.0) -> "MeshHierarchy":
         """Coarse levels made from the fine `mesh` alone, by nonnegative smoothed aggregation
-        (mesh/aggregation.py) down to at most `coarsest` nodes: for a mesh as it comes from a mesher,
-        with no coarse mesh to refine. The hierarchy holds the fine mesh and the transfers; its
-        coarse levels have no meshes (kind "aggregation")."""
+        (mesh/aggregation.py) down to at most `coarsest` nodes. Fewer cycles than the geometric
+        coarsening on some meshes, but wider coarse stencils and a slower cycle
+        (0025-aggregation-coarse-spaces). The hierarchy holds the fine mesh and the transfers
+        (kind "aggregation")."""
         from .aggregation import aggregation_prolongations
 
+        return cls._from_fine(mesh, "aggregation",
+                              lambda: aggregation_prolongations(mesh, coarsest=coarsest, omega=omega))
+
+    @classmethod
+    def _from_fine(cls, mesh: Mesh, kind: str, prolongations) -> "MeshHierarchy":
+        if not isinstance(mesh, Mesh):
+            raise TypeError(f"mesh must be a Mesh, got {type(mesh).__name__}")
         t0 = time.perf_counter()
         _core.check_cells(mesh.points, mesh.cells, mesh.cell_type)
-        transfers = []
-        for P in aggregation_prolongations(mesh, coarsest=coarsest, omega=omega):
-            transfers.append(Transfer(P.shape[0], P.shape[1], P.indptr.astype(np.int64), P.indices.astype(np.int64),
-                                      P.data.astype(float)))
-        return cls([mesh], transfers, time.perf_counter() - t0, kind="aggregation")
+        transfers = [_transfer_of(P) for P in prolongations()]
+        return cls([mesh], transfers, time.perf_counter() - t0, kind=kind)
+
+    @property
+    def from_fine_mesh(self) -> bool:
+        """Whether the coarse levels were made from the fine mesh alone (no coarse meshes)."""
+        return self.kind in FINE_MESH_KINDS
 
     def _has_coarse_meshes(self, what: str) -> None:
-        if self.kind == "aggregation":
-            raise ValueError(f"{what} needs the coarse meshes, and an aggregation hierarchy has none (its coarse "
-                             "levels are aggregates of the fine mesh's nodes)")
+        if self.from_fine_mesh:
+            raise ValueError(f"{what} needs the coarse meshes, and a hierarchy made from the fine mesh alone "
+                             f"({self.kind}) has none")
 
     @classmethod
     def build(cls, mesh: Mesh, levels: int, projector: Optional[Projector] = None,

@@ -423,7 +423,7 @@ class Problem:
         (refinement splits cells and joins nothing) and handed down through the transfers: a
         fine node lies in the piece of its first coarse parent."""
         h = self.hierarchy
-        if h.kind == "aggregation":  # no coarse mesh: count on the fine one
+        if h.from_fine_mesh:  # no coarse mesh: count on the fine one
             return connected_components(self.mesh.cells, self.mesh.num_points)
         coarse = h.meshes[0]
         count, label = connected_components(coarse.cells, coarse.num_points)
@@ -679,28 +679,44 @@ class Problem:
 
     # notes on what the problem did on its own (read by reports and summaries)
     notes: tuple = ()
+    # coarse levels made below the hierarchy's coarse mesh from it (_coarsen_below)
+    _levels_below: int = 0
+
+    def coarse_levels_from_mesh(self) -> bool:
+        """Whether some coarse levels were made from a mesh alone (geometric coarsening or
+        aggregation, not refinement): the hierarchy's own, or those made below its coarse mesh."""
+        return bool(self.hierarchy.from_fine_mesh or self._levels_below)
 
     def _coarsen_below(self, h: MeshHierarchy) -> None:
-        """A coarse mesh too large for the coarsest level's direct solve (a fine mesh from a mesher
-        taken as the coarse level) gets levels of aggregates below it (mesh/aggregation.py), down to
-        a size a direct solve takes at once; the problem says so (notes, a warning)."""
-        if h.kind == "aggregation":
+        """Coarse levels made from the coarse mesh alone by geometric coarsening
+        (mesh/coarsening.py), down to a size a direct solve takes at once, where the coarse mesh is
+        too large for the coarsest level's direct solve (a fine mesh from a mesher taken as the
+        coarse level), or where it is the only level (the sweeps alone contract by little more than
+        a Gauss-Seidel iteration's rate); the problem says so (notes, a warning where the user
+        gave a coarse mesh)."""
+        if h.from_fine_mesh:
             return
         coarse = h.meshes[0]
         dofs = coarse.num_points * coarse.dim
-        if dofs <= MAX_COARSEST_DOFS:
+        alone = h.levels == 1 and coarse.num_points > COARSEN_DOWN_TO_NODES
+        if dofs <= MAX_COARSEST_DOFS and not alone:
             return
-        from ..mesh.aggregation import aggregation_prolongations
+        from ..mesh.coarsening import coarsening_prolongations
 
-        below = aggregation_prolongations(coarse, coarsest=AGGREGATE_DOWN_TO_NODES)
+        below = coarsening_prolongations(coarse, coarsest=COARSEN_DOWN_TO_NODES)
         if not below:
             return
         self.transfers = [_scalar_transfer(P) for P in below] + self.transfers
-        note = (f"the coarse mesh has {dofs:,} dofs, more than the coarsest level's direct solve should take "
-                f"({MAX_COARSEST_DOFS:,}): {len(below)} levels of aggregates were added below it, down to "
+        self._levels_below = len(below)
+        made = (f"{len(below)} coarser levels were made from it by geometric coarsening, down to "
                 f"{below[0].shape[1] * coarse.dim:,} dofs")
+        if dofs > MAX_COARSEST_DOFS:
+            note = (f"the coarse mesh has {dofs:,} dofs, more than the coarsest level's direct solve should take "
+                    f"({MAX_COARSEST_DOFS:,}): {made}")
+            warnings.warn(note, UserWarning, stacklevel=4)
+        else:
+            note = f"the mesh is the only level of its hierarchy: {made}"
         self.notes = (note,)
-        warnings.warn(note, UserWarning, stacklevel=4)
 
     def vector_bytes(self) -> int:
         """Bytes of the problem's vectors now held (load, Dirichlet data, contact boundary, coefficients)."""
@@ -723,12 +739,12 @@ class Problem:
         write_mesh(path, self.mesh, point_data=data, cell_data=result.cell_data())
 
 
-# Above this many dofs the coarse mesh of a hierarchy is not solved directly: levels of aggregates go
-# below it, down to AGGREGATE_DOWN_TO_NODES nodes (0027-coarse-level-size: a gmsh mesh of 7,032 dofs
+# Above this many dofs the coarse mesh of a hierarchy is not solved directly: coarser levels go
+# below it, down to COARSEN_DOWN_TO_NODES nodes (0027-coarse-level-size: a gmsh mesh of 7,032 dofs
 # as the coarse level took 2.98 s, with aggregates below it 0.42 s; the paper's coarsest, 2,286 dofs
 # at most, stay as they are).
 MAX_COARSEST_DOFS = 4000
-AGGREGATE_DOWN_TO_NODES = 200
+COARSEN_DOWN_TO_NODES = 200
 
 
 def _holds_rigid_motion(x: np.ndarray, fixed: np.ndarray) -> bool:

@@ -364,7 +364,9 @@ class ContactResult:
         contact/stick/slip node counts, the contact extent, and with the problem known the total
         contact force, the reactions per Dirichlet tag, the largest von Mises stress and the
         largest violation of the contact conditions (check())."""
-        rows = [("method", self.method), ("law", self.law),
+        after = self.extra.get("switched_to_tnnmg_after")
+        method = self.method if after is None else f"{self.method}, then tnnmg after cycle {after}"
+        rows = [("method", method), ("law", self.law),
                 ("converged", f"{self.converged} ({self.status})"), ("cycles", str(self.cycles)),
                 ("dofs", str(self.displacement.size)), ("solve seconds", f"{self.solve_seconds:.4g}")]
         rows += [(k.replace("_", " "), str(v)) for k, v in self.counts().items()]

@@ -102,6 +102,11 @@ class SolverOptions:
     fixed_point_stall_window: int = 0
     """Algorithm 1: stop as not converging once the change has not fallen below the one that many
     outer iterations before (0: run to fixed_point_max)."""
+    switch_rate: Optional[float] = None
+    """Algorithm 2 (method nmg): once its corrections contract by less than this per cycle, the solve
+    goes on with TNNMG steps from its iterate, under the same stop (0: never). None: SWITCH_RATE where
+    the method was left to the solver and the coarse levels were made from a fine mesh alone
+    (0029-geometric-coarsening), else 0."""
     linear: Optional[str] = None
     """tnnmg's linear correction: "pcg", "cycle" or "coarse" (None: the core's default)."""
     lines: Optional[bool] = None
@@ -150,6 +155,11 @@ class SolverOptions:
             v = getattr(self, name)
             if v is not None and not isinstance(v, (bool, np.bool_)):
                 raise ValueError(f"{name} must be True or False, got {v!r}")
+        if self.switch_rate is not None:
+            if not (_is_real(self.switch_rate) and 0 <= self.switch_rate < 1):
+                raise ValueError(f"switch_rate must be a number in [0, 1) (0: never), got {self.switch_rate!r}")
+            if self.switch_rate > 0 and self.method not in (None, "nmg"):
+                raise ValueError(f"switch_rate is a choice of method 'nmg' (Algorithm 2), not {self.method!r}")
         if self.release_hierarchy is None:
             raise ValueError("release_hierarchy must be True or False, got None")
         if (self.linear is not None or self.lines is not None) and self.method not in (None, "tnnmg"):
@@ -204,6 +214,8 @@ class SolverOptions:
                 continue
             if f.name == "fixed_point_stall_window" and not v:
                 continue
+            if f.name == "switch_rate" and not (v and self.method == "nmg"):
+                continue
             if f.name == "omega_post" and v == self.omega:
                 continue  # the core's own default: the post-smoothing takes omega
             out[f.name] = bool(v) if isinstance(v, np.bool_) else v
@@ -257,6 +269,11 @@ def options_from(options=None, **fields) -> SolverOptions:
 # cell aspect ratio (longest over shortest edge) from which it stalls (aspect 32: 283 against 22).
 STIFF_NU = 0.45
 STRETCHED_ASPECT = 8.0
+# Where Algorithm 2 on coarse levels made from a fine mesh alone goes on with TNNMG: corrections that
+# contract by less than this per cycle (0029-geometric-coarsening: the cork's 4-layer mesh coarsened,
+# 41 cycles of Algorithm 2 against 9 of TNNMG; the Hertz and sphere families contract by 0.1-0.2 and
+# stay with Algorithm 2, which is twice as fast there).
+SWITCH_RATE = 0.5
 
 
 def cell_aspect_ratio(mesh) -> float:
@@ -290,9 +307,12 @@ def resolve_options(problem, options=None) -> SolverOptions:
     given, else DEFAULT_OMEGA_POST_ADAPTIVE on 2D adaptive hierarchies, else omega; petrov_galerkin
     and upwind_contact_sweep: on for 2D adaptive hierarchies under Coulomb friction;
     projected_coarse_correction: on where a contact frame is rotated; local_smoothing: on for
-    adaptive hierarchies; ordering: DEFAULT_ORDERING. Left None: linear and lines (the core's own)."""
+    adaptive hierarchies; ordering: DEFAULT_ORDERING; switch_rate: SWITCH_RATE where the method is the
+    solver's choice, Algorithm 2, and the coarse levels were made from a fine mesh alone, else 0. Left
+    None: linear and lines (the core's own)."""
     o = options_from(options)
-    if o.method is None:
+    chosen = o.method is None
+    if chosen:
         o = o.replace(method=default_method(problem) if o.linear is None and o.lines is None else "tnnmg")
     mesh = problem.mesh
     adaptive_2d = problem.hierarchy.kind == "adaptive" and mesh.dim == 2
@@ -316,4 +336,7 @@ def resolve_options(problem, options=None) -> SolverOptions:
         changes["local_smoothing"] = problem.hierarchy.kind == "adaptive"
     if o.ordering is None:
         changes["ordering"] = DEFAULT_ORDERING
+    if o.switch_rate is None:
+        auto = chosen and o.method == "nmg" and problem.law != "linear" and problem.coarse_levels_from_mesh()
+        changes["switch_rate"] = SWITCH_RATE if auto else 0.0
     return o.replace(**changes) if changes else o

@@ -225,6 +225,8 @@ class Solver:
             res.extra["upwind_contact_sweep"] = True
         if raw.get("projected_coarse_correction"):
             res.extra["projected_coarse_correction"] = True
+        if raw.get("switched_at"):  # Algorithm 2 went on with TNNMG after this cycle (switch_rate)
+            res.extra["switched_to_tnnmg_after"] = int(raw["switched_at"])
         if opts.method == "fixed-point" and "outer_changes" in raw:
             res.extra["outer_changes"] = [float(c) for c in raw["outer_changes"]]
         if "threads" in raw:
