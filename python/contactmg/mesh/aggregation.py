@@ -70,21 +70,7 @@ def _pattern(M):
     return M
 
 
-def _truncated(P, drop: float):
-    """P without the weights below `drop` times their row's largest, rows scaled back to sum one."""
-    import scipy.sparse as sp
-
-    P = P.tocsr()
-    rowmax = np.maximum.reduceat(P.data, P.indptr[:-1]) if P.nnz else np.zeros(0)
-    rows = np.repeat(np.arange(P.shape[0]), np.diff(P.indptr))
-    keep = P.data >= drop * rowmax[rows]
-    Q = sp.csr_matrix((P.data[keep], (rows[keep], P.indices[keep])), shape=P.shape)
-    s = np.asarray(Q.sum(axis=1)).ravel()
-    return (sp.diags(1.0 / s) @ Q).tocsr()
-
-
-def aggregation_prolongations(mesh: Mesh, coarsest: int = 200, rounds: int = 0, omega: float = 1.0,
-                               drop: float = 0.0) -> List:
+def aggregation_prolongations(mesh: Mesh, coarsest: int = 200, rounds: int = 0, omega: float = 1.0) -> List:
     """The prolongations (scipy CSR, fine x coarse) from the coarsest level to `mesh`, coarsest
     first, of nonnegative smoothed aggregation (module docstring). `rounds`: matchings per level
     (0: the mesh's dimension); `omega` in [0, 1]: the smoothing (0: plain aggregation)."""
@@ -113,8 +99,6 @@ def aggregation_prolongations(mesh: Mesh, coarsest: int = 200, rounds: int = 0, 
             degree = np.asarray(G.sum(axis=1)).ravel()
             S = (1.0 - omega) * sp.identity(n) + omega * (sp.diags(1.0 / np.maximum(degree, 1.0)) @ G)
             P = (S @ P).tocsr()
-        if drop > 0:
-            P = _truncated(P, drop)
         P.eliminate_zeros()
         P.sort_indices()
         out.append(P)
