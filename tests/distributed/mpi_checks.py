@@ -155,11 +155,19 @@ def main(mode):
         return
     for name, make in MESHES.items():
         mesh = make()
-        d = DistributedHierarchy.build(mesh, LEVELS, comm=comm)
         h = MeshHierarchy.build(mesh, LEVELS) if comm.rank == 0 else None
-        check_hierarchy(comm, name, mesh, d, h)
-        check_halo(comm, name, d)
-        check_colouring(comm, name, d, h)
+        # METIS's partition; for two cell types also one scattered cell by cell (parts not connected:
+        # many more ghosts and entities numbered by another rank), and recursive bisection for one
+        variants = [("", {})]
+        if name in ("triangle", "tetra"):
+            variants.append((" scattered", {"part": np.arange(mesh.num_cells) % comm.size}))
+        if name == "quad":
+            variants.append((" bisection", {"method": "bisection"}))
+        for suffix, kw in variants:
+            d = DistributedHierarchy.build(mesh, LEVELS, comm=comm, **kw)
+            check_hierarchy(comm, name + suffix, mesh, d, h)
+            check_halo(comm, name + suffix, d)
+            check_colouring(comm, name + suffix, d, h)
     check_sums(comm)
     rank0_print("ALL OK", comm=comm)
 

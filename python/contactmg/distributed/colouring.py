@@ -36,19 +36,26 @@ def _neighbours(cells: np.ndarray, n: int):
     return key // n, key % n
 
 
-def greedy_colours(cells: np.ndarray, gid: np.ndarray, active: np.ndarray, colour: np.ndarray) -> int:
-    """One Jones-Plassmann pass over the local nodes, in place: every uncoloured node of `active`
-    whose higher-priority neighbours are all coloured takes the smallest colour they do not have,
-    repeated until no active node can take one. Returns how many nodes it coloured."""
-    n = len(gid)
-    i, j = _neighbours(cells, n)
-    p = priority(gid)
-    higher = (p[j] > p[i]) | ((p[j] == p[i]) & (gid[j] > gid[i]))
-    hi_i, hi_j = i[higher], j[higher]
+class _Graph:
+    """The local node graph (nodes sharing a cell) with each edge's direction of higher priority."""
+
+    def __init__(self, cells: np.ndarray, gid: np.ndarray):
+        self.n = len(gid)
+        self.i, self.j = _neighbours(cells, self.n)
+        p = priority(gid)
+        higher = (p[self.j] > p[self.i]) | ((p[self.j] == p[self.i]) & (gid[self.j] > gid[self.i]))
+        self.hi_i, self.hi_j = self.i[higher], self.j[higher]
+
+
+def greedy_colours(graph: _Graph, active: np.ndarray, colour: np.ndarray) -> int:
+    """Jones-Plassmann steps over the local nodes, in place: every uncoloured node of `active` whose
+    higher-priority neighbours are all coloured takes the smallest colour they do not have, repeated
+    until no active node can take one. Returns how many nodes it coloured."""
+    n, i, j = graph.n, graph.i, graph.j
     done = 0
     while True:
         waiting = np.zeros(n, bool)
-        waiting[hi_i[colour[hi_j] < 0]] = True
+        waiting[graph.hi_i[colour[graph.hi_j] < 0]] = True
         ready = np.flatnonzero(active & (colour < 0) & ~waiting)
         if not len(ready):
             return done
@@ -72,8 +79,9 @@ def colour_level(level, comm=None) -> np.ndarray:
     colour = np.full(n, -1, np.int64)
     owned = level.owner == comm.rank
     values = np.zeros(n)
+    graph = _Graph(level.cells, level.gid)
     while True:
-        greedy_colours(level.cells, level.gid, owned, colour)
+        greedy_colours(graph, owned, colour)
         left = comm.allreduce(int(np.count_nonzero(colour[owned] < 0)), op=op(comm, "SUM"))
         if level.halo is not None and comm.size > 1:
             values[:] = colour

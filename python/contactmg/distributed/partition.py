@@ -79,7 +79,11 @@ def partition_cells(mesh: Mesh, parts: int, method: Optional[str] = None) -> np.
             pymetis = None
         if pymetis is not None:
             xadj, adjncy = dual_graph(mesh)
-            result = pymetis.part_graph(parts, xadj=xadj, adjncy=adjncy, options=pymetis.Options(seed=METIS_SEED))
+            options = pymetis.Options(seed=METIS_SEED)
+            if hasattr(pymetis, "CSRAdjacency"):  # pymetis 2025 on; the keywords are deprecated there
+                result = pymetis.part_graph(parts, pymetis.CSRAdjacency(xadj, adjncy), options=options)
+            else:
+                result = pymetis.part_graph(parts, xadj=xadj, adjncy=adjncy, options=options)
             part = np.asarray(result.vertex_part if hasattr(result, "vertex_part") else result[1], np.int64)
             if len(np.unique(part)) == parts:
                 return part
