@@ -37,35 +37,44 @@ def _neighbours(cells: np.ndarray, n: int):
 
 
 class _Graph:
-    """The local node graph (nodes sharing a cell) with each edge's direction of higher priority."""
+    """The local node graph (nodes sharing a cell, CSR by node) and its edges towards higher priority."""
 
     def __init__(self, cells: np.ndarray, gid: np.ndarray):
         self.n = len(gid)
-        self.i, self.j = _neighbours(cells, self.n)
+        i, self.j = _neighbours(cells, self.n)  # sorted by i
+        self.ptr = np.zeros(self.n + 1, np.int64)
+        np.cumsum(np.bincount(i, minlength=self.n), out=self.ptr[1:])
         p = priority(gid)
-        higher = (p[self.j] > p[self.i]) | ((p[self.j] == p[self.i]) & (gid[self.j] > gid[self.i]))
-        self.hi_i, self.hi_j = self.i[higher], self.j[higher]
+        higher = (p[self.j] > p[i]) | ((p[self.j] == p[i]) & (gid[self.j] > gid[i]))
+        self.hi_i, self.hi_j = i[higher], self.j[higher]
 
 
 def greedy_colours(graph: _Graph, active: np.ndarray, colour: np.ndarray) -> int:
     """Jones-Plassmann steps over the local nodes, in place: every uncoloured node of `active` whose
     higher-priority neighbours are all coloured takes the smallest colour they do not have, repeated
     until no active node can take one. Returns how many nodes it coloured."""
-    n, i, j = graph.n, graph.i, graph.j
+    n = graph.n
+    # the edges that can still hold a node back: from an uncoloured active node
+    keep = active[graph.hi_i] & (colour[graph.hi_i] < 0)
+    hi_i, hi_j = graph.hi_i[keep], graph.hi_j[keep]
     done = 0
     while True:
+        blocked = colour[hi_j] < 0
+        hi_i, hi_j = hi_i[blocked], hi_j[blocked]  # a coloured neighbour never blocks again
         waiting = np.zeros(n, bool)
-        waiting[graph.hi_i[colour[graph.hi_j] < 0]] = True
+        waiting[hi_i] = True
         ready = np.flatnonzero(active & (colour < 0) & ~waiting)
         if not len(ready):
             return done
-        # the colours of the coloured neighbours of each ready node
-        is_ready = np.full(n, -1, np.int64)
-        is_ready[ready] = np.arange(len(ready))
-        sel = (is_ready[i] >= 0) & (colour[j] >= 0)
+        # the colours of the neighbours of each ready node (-1: not coloured yet)
+        count = graph.ptr[ready + 1] - graph.ptr[ready]
+        row = np.repeat(np.arange(len(ready)), count)
+        at = np.repeat(graph.ptr[ready], count) + np.arange(int(count.sum())) - np.repeat(np.cumsum(count) - count,
+                                                                                           count)
+        c = colour[graph.j[at]]
         width = int(colour.max(initial=-1)) + 2
         used = np.zeros((len(ready), width), bool)
-        used[is_ready[i[sel]], colour[j[sel]]] = True
+        used[row[c >= 0], c[c >= 0]] = True
         colour[ready] = np.argmin(used, axis=1)  # the first colour not used
         done += len(ready)
 
