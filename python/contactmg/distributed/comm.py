@@ -19,32 +19,40 @@ class SerialComm:
     size = 1
 
     def Get_rank(self) -> int:
+        """0, as mpi4py's Get_rank."""
         return 0
 
     def Get_size(self) -> int:
+        """1, as mpi4py's Get_size."""
         return 1
 
     def barrier(self) -> None:
-        pass
+        """Nothing to wait for."""
 
     def bcast(self, obj: Any, root: int = 0) -> Any:
+        """`obj` itself."""
         return obj
 
     def allreduce(self, obj: Any, op: Any = None) -> Any:
+        """`obj` itself: the reduction of one value."""
         return obj
 
     def allgather(self, obj: Any) -> List[Any]:
+        """[obj]."""
         return [obj]
 
     def gather(self, obj: Any, root: int = 0) -> List[Any]:
+        """[obj] (the root is this rank)."""
         return [obj]
 
     def alltoall(self, objs: List[Any]) -> List[Any]:
+        """The list of one item given, which this rank sends to itself."""
         if len(objs) != 1:
             raise ValueError(f"alltoall on one rank takes a list of one item, got {len(objs)}")
         return list(objs)
 
     def Abort(self, errorcode: int = 1) -> None:
+        """End the process with `errorcode`."""
         raise SystemExit(errorcode)
 
     def __repr__(self) -> str:
@@ -145,15 +153,10 @@ def abort_on_uncaught(comm=None) -> None:
     comm = get_comm(comm)
     if is_serial(comm):
         return
-    previous = sys.excepthook
 
     def hook(kind, value, tb):
         sys.stderr.write(f"rank {comm.rank}: " + "".join(traceback.format_exception(kind, value, tb)))
         sys.stderr.flush()
-        previous_exit = 1
-        try:
-            comm.Abort(previous_exit)
-        finally:  # pragma: no cover - Abort does not return
-            previous(kind, value, tb)
+        comm.Abort(1)  # does not return: the MPI runtime ends every rank
 
     sys.excepthook = hook
