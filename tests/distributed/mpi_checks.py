@@ -95,6 +95,9 @@ def check_halo(comm, name, d):
         assert np.array_equal(v[:, 0], np.sin(lev.gid)) and np.array_equal(v[:, 1], lev.gid + 0.5), \
             f"{name} level {L} rank {comm.rank}: a ghost did not get its owner's value"
         ghosts += len(lev.ghosts)
+        # a sum over the owned nodes (each node once) is the sum over the whole level
+        total = exact_sum(np.sin(lev.gid[lev.owned]), comm=comm)
+        assert total == math.fsum(np.sin(np.arange(lev.num_global_nodes))), f"{name} level {L}: sum differs"
     total = comm.allreduce(ghosts)
     assert (total > 0) == (comm.size > 1), f"{name}: {total} ghosts on {comm.size} ranks"
     rank0_print(f"OK halo {name}", comm=comm)

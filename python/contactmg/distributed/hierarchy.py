@@ -71,7 +71,8 @@ class LocalLevel:
     num_global_nodes: int
     num_global_cells: int
     rank: int
-    origin: np.ndarray = field(repr=False)   # (n, k) coarse vertices each node descends from, -1 padded
+    # (n, k) coarse vertices each node descends from, -1 padded; kept on the finest level only
+    origin: Optional[np.ndarray] = field(repr=False)
     transfer: Optional[LocalTransfer] = None  # from the level below (None on the coarse level)
     halo: Optional[Halo] = None
 
@@ -263,6 +264,7 @@ class DistributedHierarchy:
             local = [cls._coarse_level(coarse, part, comm.rank, owners)]
         for _ in range(levels - 1):
             local.append(cls._refine(local[-1], coarse.cell_type, comm, owners))
+            local[-2].origin = None  # needed only to refine that level
         for lev in local:
             lev.halo = Halo.build(comm, lev.gid, lev.owner)
         return cls(local, comm, part, coarse.cell_type, time.perf_counter() - t0)
