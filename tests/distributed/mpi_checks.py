@@ -1,10 +1,11 @@
-"""Checks run under mpirun by test_distributed.py: `mpirun -n N python mpi_checks.py MODE`.
+"""Checks run under mpirun by test_mpi_ranks.py: `mpirun -n N python mpi_checks.py MODE`.
 
-MODE "all": the distributed hierarchy gathered equals the serial one (points bitwise, cells, facets,
-prolongation rows, ownership), the halo exchange gives every ghost its owner's value, exact sums
-equal math.fsum of the whole, and the node colouring equals the serial greedy rule and is valid,
-for triangles, quadrilaterals, tetrahedra and hexahedra. Rank 0 prints "OK <check>" per check and
-"ALL OK" at the end; a failed check raises, which ends every rank (abort_on_uncaught).
+MODE "all": the distributed hierarchy gathered equals the serial one (points bitwise, with new
+boundary nodes projected onto curved boundaries; cells, facets, prolongation rows, owners), the halo
+exchange gives every ghost its owner's value, exact sums equal math.fsum of the whole, and the node
+colouring equals the serial greedy rule and is valid, for triangles, quadrilaterals, tetrahedra and
+hexahedra. Rank 0 prints "OK <check>" per check and "ALL OK" at the end; a failed check raises,
+which ends every rank (abort_on_uncaught).
 MODE "error": rank 1 fails a guarded input check; every rank prints the error it gets.
 MODE "uncaught": rank 1 raises outside any guard while the others wait in a barrier."""
 import math
@@ -16,16 +17,17 @@ import numpy as np
 from contactmg.distributed import (DistributedError, DistributedHierarchy, abort_on_uncaught, colour_level,
                                    exact_dot, exact_sum, get_comm, raise_together, rank0_print)
 from contactmg.distributed.colouring import priority
-from contactmg.mesh.generators import hertz_half_disk
-from contactmg.mesh.generators_3d import box
+from contactmg.mesh.generators import hertz_half_disk, hertz_projector
+from contactmg.mesh.generators_3d import ball_projector, box, half_ball
 from contactmg.mesh.hierarchy import MeshHierarchy
 
 LEVELS = 3
+# (coarse mesh, boundary projector): the half disks' new nodes on the arc are projected onto it
 MESHES = {
-    "triangle": lambda: hertz_half_disk("triangle"),
-    "quad": lambda: hertz_half_disk("quad"),
-    "tetra": lambda: box(3, 2, 2, cell="tetra"),
-    "hexahedron": lambda: box(3, 2, 2, cell="hexahedron"),
+    "triangle": (lambda: hertz_half_disk("triangle"), hertz_projector()),
+    "quad": (lambda: hertz_half_disk("quad"), hertz_projector()),
+    "tetra": (lambda: box(3, 2, 2, cell="tetra"), None),
+    "hexahedron": (lambda: box(3, 2, 2, cell="hexahedron"), None),
 }
 
 
@@ -156,9 +158,9 @@ def main(mode):
             raise RuntimeError("an unguarded failure on one rank")
         comm.barrier()
         return
-    for name, make in MESHES.items():
+    for name, (make, projector) in MESHES.items():
         mesh = make()
-        h = MeshHierarchy.build(mesh, LEVELS) if comm.rank == 0 else None
+        h = MeshHierarchy.build(mesh, LEVELS, projector=projector) if comm.rank == 0 else None
         # METIS's partition; for two cell types also one scattered cell by cell (parts not connected:
         # many more ghosts and entities numbered by another rank), and recursive bisection for one
         variants = [("", {})]
@@ -167,10 +169,17 @@ def main(mode):
         if name == "quad":
             variants.append((" bisection", {"method": "bisection"}))
         for suffix, kw in variants:
-            d = DistributedHierarchy.build(mesh, LEVELS, comm=comm, **kw)
+            d = DistributedHierarchy.build(mesh, LEVELS, comm=comm, projector=projector, **kw)
             check_hierarchy(comm, name + suffix, mesh, d, h)
             check_halo(comm, name + suffix, d)
             check_colouring(comm, name + suffix, d, h)
+    # hexahedra of a half ball, new surface nodes projected onto the sphere (rims between the sphere
+    # and the flat face: a ghost may not see both facets, its owner does)
+    mesh = half_ball("hexahedron")
+    h = MeshHierarchy.build(mesh, 2, projector=ball_projector()) if comm.rank == 0 else None
+    d = DistributedHierarchy.build(mesh, 2, comm=comm, projector=ball_projector())
+    check_hierarchy(comm, "ball", mesh, d, h)
+    check_halo(comm, "ball", d)
     check_sums(comm)
     rank0_print("ALL OK", comm=comm)
 

@@ -18,7 +18,7 @@ def test_distributed_checks_on_ranks(ranks):
     expected = {f"OK {check} {cell}" for check in ("hierarchy", "halo", "colouring") for cell in CELLS}
     expected |= {f"OK {check} {variant}" for check in ("hierarchy", "halo", "colouring")
                  for variant in ("triangle scattered", "tetra scattered", "quad bisection")}
-    expected |= {"OK sums", "ALL OK"}
+    expected |= {"OK hierarchy ball", "OK halo ball", "OK sums", "ALL OK"}
     assert expected <= lines, f"missing: {sorted(expected - lines)}\n{r.stdout}"
     # rank 0 alone reports
     assert r.stdout.count("ALL OK") == 1

@@ -156,3 +156,25 @@ def test_serial_package_works_without_mpi4py_and_pymetis():
                        env={"PYTHONPATH": root, "PATH": "/usr/bin:/bin"})
     assert r.returncode == 0, r.stderr
     assert r.stdout.split() == ["SerialComm", "25", "True"]
+
+
+def test_projected_one_rank_hierarchy_is_the_serial_one_and_cad_projectors_are_refused():
+    from contactmg.mesh.generators import hertz_projector
+
+    mesh = hertz_half_disk("triangle")
+    h = MeshHierarchy.build(mesh, 3, projector=hertz_projector())
+    d = DistributedHierarchy.build(mesh, 3, projector=hertz_projector())
+    assert np.array_equal(d.gathered(2)[0], h.meshes[2].points)
+    assert not np.array_equal(h.meshes[2].points, MeshHierarchy.build(mesh, 3).meshes[2].points)
+
+    class FollowsFacets:
+        def __call__(self, points, tags):
+            return points
+
+        def project_refinement(self, coarse, r):
+            return r["points"][r["boundary_nodes"]]
+
+    with pytest.raises(DistributedError, match="not distributed yet"):
+        DistributedHierarchy.build(mesh, 2, projector=FollowsFacets())
+    with pytest.raises(DistributedError, match="returned shape"):
+        DistributedHierarchy.build(mesh, 2, projector=lambda p, t: p[:1])

@@ -237,10 +237,12 @@ class DistributedHierarchy:
 
     @classmethod
     def build(cls, coarse: Mesh, levels: int, comm=None, part: Optional[np.ndarray] = None,
-              method: Optional[str] = None) -> "DistributedHierarchy":
+              method: Optional[str] = None, projector=None) -> "DistributedHierarchy":
         """Partition `coarse` (the same mesh on every rank) among the ranks of `comm` (or take `part`,
         a rank per coarse cell) and refine each rank's part until there are `levels` levels.
-        Collective."""
+        `projector(points, tags)` moves the new boundary nodes as in MeshHierarchy.build (a point-wise
+        projector such as the generators' circle, sphere and cylinder projectors); every ghost node
+        then takes its owner's position, which saw all the boundary facets at the node. Collective."""
         comm = get_comm(comm)
         t0 = time.perf_counter()
         with raise_together(comm):
@@ -249,6 +251,12 @@ class DistributedHierarchy:
             if coarse.cell_type not in CELL_NODES:
                 raise ValueError(f"unknown cell type {coarse.cell_type!r}")
             _core.check_cells(coarse.points, coarse.cells, coarse.cell_type)
+            if projector is not None and hasattr(projector, "project_refinement"):
+                raise ValueError("a projector that follows the coarse facets (a CAD model's) is not distributed yet: "
+                                 "build the hierarchy on one rank")
+            if projector is not None and getattr(projector, "relax", False):
+                raise ValueError("relaxation next to projected nodes is not distributed yet: use a projector "
+                                 "without relax, or one rank")
         if part is None:
             part = partition(coarse, comm, method)
         with raise_together(comm):
@@ -262,11 +270,14 @@ class DistributedHierarchy:
                 raise ValueError(f"rank(s) {empty} have no coarse cell in part: every rank needs at least one")
             owners = _Owners(coarse, part)
             local = [cls._coarse_level(coarse, part, comm.rank, owners)]
+        local[0].halo = Halo.build(comm, local[0].gid, local[0].owner)
         for _ in range(levels - 1):
-            local.append(cls._refine(local[-1], coarse.cell_type, comm, owners))
-            local[-2].origin = None  # needed only to refine that level
-        for lev in local:
+            lev = cls._refine(local[-1], coarse.cell_type, comm, owners, projector)
             lev.halo = Halo.build(comm, lev.gid, lev.owner)
+            if projector is not None:
+                lev.halo.update(lev.points)  # a ghost may miss a boundary facet at the node: its owner has all
+            local[-1].origin = None  # needed only to refine that level
+            local.append(lev)
         return cls(local, comm, part, coarse.cell_type, time.perf_counter() - t0)
 
     @staticmethod
@@ -284,9 +295,12 @@ class DistributedHierarchy:
                           coarse.num_points, coarse.num_cells, rank, origin)
 
     @staticmethod
-    def _refine(lev: LocalLevel, cell_type: str, comm, owners: _Owners) -> LocalLevel:
+    def _refine(lev: LocalLevel, cell_type: str, comm, owners: _Owners, projector=None) -> LocalLevel:
         rank = comm.rank
         r = _core.refine(lev.points, lev.cells, cell_type, lev.facets, lev.facet_tags)
+        if projector is not None:
+            with raise_together(comm):
+                _project(r, projector, lev.points.shape[1])
         ptr, parent, weight = (np.asarray(r[key]) for key in ("ptr", "parent", "weight"))
         ptr, parent = ptr.astype(np.int64), parent.astype(np.int64)
         n, m, k = len(lev.gid), len(lev.cells), lev.cells.shape[1]
@@ -352,6 +366,19 @@ class DistributedHierarchy:
             raise RuntimeError(f"level {level}: {int(np.count_nonzero(seen != 1))} nodes and "
                                f"{int(np.count_nonzero(seen_c != 1))} cells are not owned by exactly one rank")
         return points, cells
+
+
+def _project(r: dict, projector, d: int) -> None:
+    """Move the new boundary nodes of a refinement result in place, checked as the serial build does."""
+    nb = np.asarray(r["boundary_nodes"], np.int64)
+    if not len(nb):
+        return
+    moved = np.asarray(projector(r["points"][nb], r["boundary_tags"]), dtype=float)
+    if moved.shape != (len(nb), d):
+        raise ValueError(f"the boundary projector returned shape {moved.shape}, expected {(len(nb), d)}")
+    if not np.all(np.isfinite(moved)):
+        raise ValueError("the boundary projector returned a non-finite coordinate")
+    r["points"][nb] = moved
 
 
 def _entity_ids(comm, lev: LocalLevel, nodes: np.ndarray, first: int) -> Tuple[np.ndarray, int]:
