@@ -33,7 +33,7 @@ def missing() -> str:
 
 
 def run_ranks(n: int, *args: str, timeout: float = 60.0) -> subprocess.CompletedProcess:
-    """`mpiexec -n n python mpi_checks.py args`, the package this test imports on PYTHONPATH, one
+    """`mpiexec -n n python mpi_checks.py args n`, the package this test imports on PYTHONPATH, one
     thread per rank. On timeout every rank is killed and the test fails with what they printed."""
     env = dict(os.environ)
     package_root = str(Path(contactmg.__file__).resolve().parent.parent)
@@ -42,7 +42,7 @@ def run_ranks(n: int, *args: str, timeout: float = 60.0) -> subprocess.Completed
     # Open MPI refuses to run as root and to place more ranks than cores without these
     env.update(OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OMPI_MCA_rmaps_base_oversubscribe="1",
                PRTE_MCA_rmaps_default_mapping_policy=":oversubscribe")
-    cmd = [launcher(), "--oversubscribe", "-n", str(n), sys.executable, str(HERE / "mpi_checks.py"), *args]
+    cmd = [launcher(), "--oversubscribe", "-n", str(n), sys.executable, str(HERE / "mpi_checks.py"), *args, str(n)]
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
                             start_new_session=True)
     try:

@@ -1,4 +1,4 @@
-"""Checks run under mpirun by test_mpi_ranks.py: `mpirun -n N python mpi_checks.py MODE`.
+"""Checks run under mpirun by test_mpi_ranks.py: `mpirun -n N python mpi_checks.py MODE N`.
 
 MODE "all": the distributed hierarchy gathered equals the serial one (points bitwise, with new
 boundary nodes projected onto curved boundaries; cells, facets, prolongation rows, owners), the halo
@@ -141,8 +141,13 @@ def check_colouring(comm, name, d, h):
     rank0_print(f"OK colouring {name}", comm=comm)
 
 
-def main(mode):
+def main(mode, ranks):
     comm = get_comm()
+    if comm.size != ranks:
+        # a launcher of another MPI than mpi4py's starts separate one-rank programs
+        print(f"started as {ranks} ranks, this rank sees {comm.size}: the launcher does not belong to mpi4py's MPI",
+              flush=True)
+        sys.exit(4)
     if mode == "error":
         try:
             with raise_together(comm):
@@ -185,4 +190,4 @@ def main(mode):
 
 
 if __name__ == "__main__":
-    main(sys.argv[1] if len(sys.argv) > 1 else "all")
+    main(sys.argv[1], int(sys.argv[2]))

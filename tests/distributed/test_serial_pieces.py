@@ -27,6 +27,8 @@ def test_one_process_gets_the_serial_stand_in():
     comm = get_comm()
     assert isinstance(comm, SerialComm) and comm.rank == 0 and comm.size == 1
     assert comm.allgather(5) == [5] and comm.alltoall(["x"]) == ["x"]
+    # no launcher started this process: MPI is not initialized for it
+    assert "mpi4py.MPI" not in sys.modules
     with pytest.raises(TypeError, match="communicator"):
         get_comm(object())
 

@@ -6,6 +6,7 @@ mpi4py is imported inside functions only: `import contactmg` works without it.""
 from __future__ import annotations
 
 import contextlib
+import os
 import sys
 import traceback
 from typing import Any, Iterator, List, Optional
@@ -68,13 +69,27 @@ def mpi_module():
     return MPI
 
 
+# Variables that MPI launchers set in every rank's environment: Open MPI's mpirun, PMIx launchers
+# (Open MPI 5, Slurm), MPICH's and Intel MPI's Hydra.
+LAUNCHER_VARIABLES = ("OMPI_COMM_WORLD_SIZE", "PMIX_RANK", "PMI_SIZE", "PMI_RANK", "MPI_LOCALNRANKS")
+
+
+def launched_by_mpi() -> bool:
+    """Did an MPI launcher start this process (or has the program imported mpi4py.MPI itself)?"""
+    return "mpi4py.MPI" in sys.modules or any(v in os.environ for v in LAUNCHER_VARIABLES)
+
+
 def get_comm(comm: Optional[Any] = None):
-    """`comm` if given; else mpi4py's COMM_WORLD when mpi4py is importable and the program runs on
-    more than one rank; else a SerialComm (one process needs no MPI at all)."""
+    """`comm` if given; else mpi4py's COMM_WORLD when the program runs on more than one rank; else a
+    SerialComm. One process needs no MPI at all: a process that no launcher started (none of
+    LAUNCHER_VARIABLES set) and that has not imported mpi4py.MPI itself does not initialize MPI.
+    Under a launcher that sets none of them, import mpi4py.MPI first or pass comm=MPI.COMM_WORLD."""
     if comm is not None:
         if not (hasattr(comm, "rank") and hasattr(comm, "size") and hasattr(comm, "allgather")):
             raise TypeError(f"comm must be an mpi4py communicator or a SerialComm, got {type(comm).__name__}")
         return comm
+    if not launched_by_mpi():
+        return SerialComm()
     MPI = mpi_module()
     if MPI is not None and MPI.COMM_WORLD.size > 1:
         return MPI.COMM_WORLD
