@@ -151,7 +151,8 @@ def test_serial_package_works_without_mpi4py_and_pymetis():
         "from contactmg.mesh.generators import rectangle\n"
         "d = dist.DistributedHierarchy.build(rectangle(2, 2), 2)\n"
         "print(type(d.comm).__name__, d.levels[-1].num_global_nodes)\n"
-        "print(dist.partition_cells(rectangle(4, 4), 3).tolist() == dist.partition_cells(rectangle(4, 4), 3, 'bisection').tolist())\n"
+        "m = rectangle(4, 4)\n"
+        "print(dist.partition_cells(m, 3).tolist() == dist.partition_cells(m, 3, 'bisection').tolist())\n"
     )
     root = str(Path(contactmg.__file__).resolve().parent.parent)
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60,

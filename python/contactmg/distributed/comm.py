@@ -81,9 +81,11 @@ def launched_by_mpi() -> bool:
 
 def get_comm(comm: Optional[Any] = None):
     """`comm` if given; else mpi4py's COMM_WORLD when the program runs on more than one rank; else a
-    SerialComm. One process needs no MPI at all: a process that no launcher started (none of
-    LAUNCHER_VARIABLES set) and that has not imported mpi4py.MPI itself does not initialize MPI.
-    Under a launcher that sets none of them, import mpi4py.MPI first or pass comm=MPI.COMM_WORLD."""
+    SerialComm. On several ranks an exception that nothing catches then ends every rank
+    (abort_on_uncaught), unless the program has set its own sys.excepthook. One process needs no MPI
+    at all: a process that no launcher started (none of LAUNCHER_VARIABLES set) and that has not
+    imported mpi4py.MPI itself does not initialize MPI. Under a launcher that sets none of them,
+    import mpi4py.MPI first or pass comm=MPI.COMM_WORLD."""
     if comm is not None:
         if not (hasattr(comm, "rank") and hasattr(comm, "size") and hasattr(comm, "allgather")):
             raise TypeError(f"comm must be an mpi4py communicator or a SerialComm, got {type(comm).__name__}")
@@ -92,6 +94,8 @@ def get_comm(comm: Optional[Any] = None):
         return SerialComm()
     MPI = mpi_module()
     if MPI is not None and MPI.COMM_WORLD.size > 1:
+        if sys.excepthook is sys.__excepthook__:  # unless the program has its own hook
+            abort_on_uncaught(MPI.COMM_WORLD)
         return MPI.COMM_WORLD
     return SerialComm()
 
