@@ -26,7 +26,12 @@ rank of their coarse ancestor). That rank is computed on every rank from the coa
 node lies in exactly the coarse cells that contain all the coarse vertices it descends from (its
 "origin", at most one cell's vertices), so each rank knows the owner of each of its nodes without
 asking. A coarse node keeps its owner on every level, and the parents of an owned node are nodes
-of an owned cell: the prolongation rows of owned nodes are local."""
+of an owned cell: the prolongation rows of owned nodes are local.
+
+A point-wise boundary projector moves the new boundary nodes as the serial build does; then every
+ghost takes its owner's position before the next refinement. The serial refinement projects a node
+on a rim (between a curved and a flat face) by the smaller tag of the facets at the node; a ghost
+may hold only one of them, its owner holds all."""
 from __future__ import annotations
 
 import time
