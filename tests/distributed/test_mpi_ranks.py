@@ -3,7 +3,7 @@ mpirun launch of mpi_checks.py: hierarchy equal to the serial one, halo exchange
 partition-independent colouring; and failures on one rank that end every rank."""
 import pytest
 
-from launch import missing, run_ranks
+from mpi_launch import missing, run_ranks
 
 pytestmark = [pytest.mark.mpi, pytest.mark.skipif(bool(missing()), reason=missing() or "MPI available")]
 
