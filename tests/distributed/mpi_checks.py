@@ -18,6 +18,7 @@ import numpy as np
 from contactmg.distributed import (DistributedError, DistributedHierarchy, colour_level, exact_dot, exact_sum,
                                    get_comm, raise_together, rank0_print)
 from contactmg.distributed.colouring import priority
+from contactmg.distributed.transfer import prolong
 from contactmg.mesh.generators import hertz_half_disk, hertz_projector
 from contactmg.mesh.generators_3d import ball_projector, box, half_ball
 from contactmg.mesh.hierarchy import MeshHierarchy
@@ -124,6 +125,25 @@ def check_sums(comm):
     rank0_print("OK sums", comm=comm)
 
 
+def check_prolongation(comm, name, d, h):
+    for L in range(1, len(d.levels)):
+        below, lev = d.levels[L - 1], d.levels[L]
+        x = np.full((len(below.gid), 2), np.nan)  # ghosts unknown: prolong must fetch them
+        x[below.owned] = np.c_[np.cos(below.gid[below.owned]), below.gid[below.owned] % 7 - 3.0]
+        y = prolong(d, L, x)
+        assert not np.isnan(y).any(), f"{name} level {L} rank {comm.rank}: a fine value is missing"
+        got = comm.gather((lev.gid[lev.owned], y[lev.owned]), root=0)
+        if comm.rank == 0:
+            n = h.meshes[L - 1].num_points
+            g = np.arange(n)
+            want = h.transfers[L - 1].matrix() @ np.c_[np.cos(g), g % 7 - 3.0]
+            full = np.full_like(want, np.nan)
+            for gi, yi in got:
+                full[gi] = yi
+            assert np.array_equal(full, want), f"{name} level {L}: prolongation differs from the serial one"
+    rank0_print(f"OK prolongation {name}", comm=comm)
+
+
 def check_colouring(comm, name, d, h):
     lev = d.levels[-1]
     colour = colour_level(lev, comm=comm)
@@ -177,6 +197,7 @@ def main(mode, ranks):
             d = DistributedHierarchy.build(mesh, LEVELS, comm=comm, projector=projector, **kw)
             check_hierarchy(comm, name + suffix, mesh, d, h)
             check_halo(comm, name + suffix, d)
+            check_prolongation(comm, name + suffix, d, h)
             check_colouring(comm, name + suffix, d, h)
     # hexahedra of a half ball, new surface nodes projected onto the sphere (rims between the sphere
     # and the flat face: a ghost may not see both facets, its owner does)

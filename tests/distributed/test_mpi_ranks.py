@@ -15,8 +15,9 @@ def test_distributed_checks_on_ranks(ranks):
     r = run_ranks(ranks, "all")
     assert r.returncode == 0, f"mpirun -n {ranks} failed (exit {r.returncode}):\n{r.stdout}\n{r.stderr}"
     lines = set(r.stdout.splitlines())
-    expected = {f"OK {check} {cell}" for check in ("hierarchy", "halo", "colouring") for cell in CELLS}
-    expected |= {f"OK {check} {variant}" for check in ("hierarchy", "halo", "colouring")
+    checks = ("hierarchy", "halo", "prolongation", "colouring")
+    expected = {f"OK {check} {cell}" for check in checks for cell in CELLS}
+    expected |= {f"OK {check} {variant}" for check in checks
                  for variant in ("triangle scattered", "tetra scattered", "quad bisection")}
     expected |= {"OK hierarchy ball", "OK halo ball", "OK sums", "ALL OK"}
     assert expected <= lines, f"missing: {sorted(expected - lines)}\n{r.stdout}"
