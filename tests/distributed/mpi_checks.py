@@ -199,6 +199,7 @@ def main(mode, ranks):
             check_halo(comm, name + suffix, d)
             check_prolongation(comm, name + suffix, d, h)
             check_colouring(comm, name + suffix, d, h)
+            d.free()
     # hexahedra of a half ball, new surface nodes projected onto the sphere (rims between the sphere
     # and the flat face: a ghost may not see both facets, its owner does)
     mesh = half_ball("hexahedron")

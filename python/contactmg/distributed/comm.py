@@ -106,8 +106,9 @@ def is_serial(comm) -> bool:
 
 
 def op(comm, name: str):
-    """The reduction `name` ("SUM", "MAX", "MIN") for comm's allreduce (ignored by a SerialComm)."""
-    if is_serial(comm):
+    """The reduction `name` ("SUM", "MAX", "MIN") for comm's allreduce (ignored by a SerialComm; an
+    mpi4py communicator of one rank still needs mpi4py's operation)."""
+    if isinstance(comm, SerialComm):
         return name
     return getattr(mpi_module(), name)
 

@@ -348,6 +348,12 @@ class DistributedHierarchy:
         return LocalLevel(points, cells, cell_gid, cell_owner, gid, owner, facets, tags, num_nodes, M * children,
                           rank, origin, transfer)
 
+    def free(self) -> None:
+        """Release the halos' neighbourhood communicators (MPI holds them until freed or finalized)."""
+        for lev in self.levels:
+            if lev.halo is not None:
+                lev.halo.free()
+
     def gathered(self, level: int, root: int = 0) -> Optional[Tuple[np.ndarray, np.ndarray]]:
         """(points (N, d) in global id order, cells (M, k) of global node ids in global cell order) of
         one level on rank `root`, from the owned nodes and cells of every rank; None on the others.
