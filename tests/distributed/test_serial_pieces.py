@@ -39,6 +39,10 @@ def test_an_error_in_a_guarded_block_is_raised_with_its_rank():
             raise KeyError("levels")
     assert isinstance(info.value.__cause__, KeyError)
 
+    with pytest.raises(SystemExit):  # an exit stays an exit on the rank that asked for it
+        with raise_together(SerialComm()):
+            raise SystemExit(2)
+
     @collective
     def check(x, comm=None):
         if x < 0:

@@ -144,11 +144,13 @@ def raise_together(comm=None) -> Iterator[None]:
     error: Optional[BaseException] = None
     try:
         yield
-    except Exception as e:  # noqa: BLE001 - any failure must reach the other ranks
+    except BaseException as e:  # noqa: BLE001 - any failure, an exit too, must reach the other ranks
         error = e
     message = None if error is None else f"{type(error).__name__}: {error}"
     messages = comm.allgather(message)
     failed = [r for r, m in enumerate(messages) if m is not None]
+    if error is not None and not isinstance(error, Exception):
+        raise error  # SystemExit, KeyboardInterrupt: this rank goes on as asked, the others raise
     if failed:
         first = failed[0]
         raise DistributedError(first, messages[first]) from error
