@@ -1,5 +1,5 @@
 # Fresh machine: `make demo` runs the Hertz benchmark with its plots, `make test` runs the tests.
-# Both install what is missing first (Eigen through apt-get, the package with its test extras).
+# Both install what is missing first (Eigen through apt-get, the package with its test, docs and MPI extras).
 PYTHON ?= python3
 OUT ?= out
 LEVELS ?= 7
@@ -14,7 +14,7 @@ setup:
 	  if [ "$$(id -u)" = 0 ]; then apt-get update -qq && apt-get install -y -qq libeigen3-dev; \
 	  else sudo apt-get update -qq && sudo apt-get install -y -qq libeigen3-dev; fi; fi
 	$(PIP) "scikit-build-core>=0.10" "pybind11>=2.12" numpy
-	$(PIP) --no-build-isolation -e ".[test,docs]"
+	$(PIP) --no-build-isolation -e ".[test,docs,mpi]"
 
 # table1: the paper's adaptive hierarchy, levels 3 5 7 9 11 (464,670 dofs), both algorithms for the ten
 # coefficients in two processes; exit status 3 (runs that did not converge, reported) does not stop the demo.

@@ -6,7 +6,7 @@ import pkgutil
 
 import contactmg
 
-LAYERS = ("mesh", "model", "results", "solve", "examples", "cli")
+LAYERS = ("mesh", "distributed", "model", "results", "solve", "examples", "cli")
 
 
 def _modules():

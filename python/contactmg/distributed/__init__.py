@@ -1,0 +1,17 @@
+"""Distributed memory: the same meshes, vectors and sums on any number of MPI ranks.
+
+comm (the communicator, or a serial stand-in without MPI; errors that end every rank), partition
+(the coarse cells among the ranks), hierarchy (each rank's part of every level, numbered as the
+serial hierarchy), exchange (ghost values from their owners; sums independent of the rank count),
+transfer (prolongation by the owners' rows), colouring (node colours independent of the partition). mpi4py and pymetis are imported only where
+they are used: the serial package needs neither."""
+from .comm import DistributedError, SerialComm, abort_on_uncaught, collective, get_comm, raise_together, rank0_print
+from .colouring import colour_level
+from .exchange import Halo, exact_dot, exact_norm, exact_sum
+from .hierarchy import DistributedHierarchy, LocalLevel, LocalTransfer
+from .partition import coordinate_bisection, partition, partition_cells
+from .transfer import prolong
+
+__all__ = ["DistributedError", "SerialComm", "abort_on_uncaught", "collective", "get_comm", "raise_together",
+           "rank0_print", "colour_level", "Halo", "exact_dot", "exact_norm", "exact_sum", "DistributedHierarchy",
+           "LocalLevel", "LocalTransfer", "coordinate_bisection", "partition", "partition_cells", "prolong"]

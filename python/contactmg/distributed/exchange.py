@@ -1,0 +1,195 @@
+"""Moving values between ranks: the halo exchange of nodal vectors (every ghost node gets its owner's
+value) and global sums whose result does not depend on the number of ranks or the partition.
+
+A floating-point sum rounds after every addition, so its value depends on the order: a sum of
+per-rank partial sums changes with the partition. exact_sum and exact_dot instead add every term
+exactly, as integers (each double is m * 2^e with an integer m of at most 53 bits), combine the
+ranks' integers exactly and round once at the end: the correctly rounded sum, the same on every
+rank count and equal to math.fsum of all the terms in one place."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Dict, List
+
+import numpy as np
+
+from .comm import get_comm, is_serial, mpi_module
+
+# x = m * 2^e with |m| < 2^53 integer: e of the smallest subnormal, 2^-1074 = 2^-1 * 2^-1073 (frexp),
+# is -1073 - 53; products of two such terms reach twice that
+_E_MIN = -2 * (1073 + 53)
+# terms of one exponent are added in int64 in runs of this length: 2^53 * 2^9 = 2^62 < 2^63 (the
+# cross terms of a product are below 2^54: 2^54 * 2^8 = 2^62)
+_RUN = 256
+
+
+def _check_finite(x: np.ndarray, what: str) -> None:
+    if not np.all(np.isfinite(x)):
+        raise ValueError(f"{what} has a non-finite entry (index {int(np.argmax(~np.isfinite(x)))}): an exact sum "
+                         "needs finite values")
+
+
+def _mantissas(x: np.ndarray):
+    """(m, e) with x = m * 2^e exactly, m int64 with |m| < 2^53."""
+    frac, ex = np.frexp(x)
+    return np.ldexp(frac, 53).astype(np.int64), ex.astype(np.int64) - 53
+
+
+def _fixed_point(m: np.ndarray, e: np.ndarray) -> int:
+    """sum(m * 2^e) exactly, as the integer T with sum = T * 2^_E_MIN. Terms are sorted by exponent
+    and added in int64 in runs of at most _RUN equal exponents (|m| < 2^54), the run sums shifted
+    into one Python integer: numpy does the bulk, Python adds about n / _RUN integers."""
+    keep = m != 0
+    m, e = m[keep], e[keep]
+    if not len(m):
+        return 0
+    order = np.argsort(e, kind="stable")
+    m, e = m[order], e[order]
+    n = len(m)
+    new_run = np.r_[True, e[1:] != e[:-1]]
+    run_start = np.maximum.accumulate(np.where(new_run, np.arange(n), 0))
+    starts = np.flatnonzero(new_run | ((np.arange(n) - run_start) % _RUN == 0))
+    sums = np.add.reduceat(m, starts)
+    shifts = e[starts] - _E_MIN
+    return sum(int(s) << int(k) for s, k in zip(sums.tolist(), shifts.tolist()))
+
+
+def _round(total: int) -> float:
+    """total * 2^_E_MIN as the nearest double (Python's integer division rounds correctly)."""
+    try:
+        return total / (1 << -_E_MIN)
+    except OverflowError:
+        raise OverflowError("the exact sum is beyond the largest double") from None
+
+
+def local_fixed_point_sum(x) -> int:
+    """This rank's terms summed exactly (the integer of _fixed_point)."""
+    x = np.ascontiguousarray(x, dtype=float).ravel()
+    _check_finite(x, "the array")
+    return _fixed_point(*_mantissas(x))
+
+
+def local_fixed_point_dot(x, y) -> int:
+    """sum(x * y) exactly: each product split into four partial products of half mantissas (26 and
+    27 bits), each exact in int64."""
+    x = np.ascontiguousarray(x, dtype=float).ravel()
+    y = np.ascontiguousarray(y, dtype=float).ravel()
+    if x.shape != y.shape:
+        raise ValueError(f"exact_dot needs arrays of one length, got {x.shape[0]} and {y.shape[0]}")
+    _check_finite(x, "the first array")
+    _check_finite(y, "the second array")
+    mx, ex = _mantissas(x)
+    my, ey = _mantissas(y)
+    sign = np.sign(mx) * np.sign(my)
+    ax, ay = np.abs(mx), np.abs(my)
+    low = (1 << 27) - 1
+    hx, lx, hy, ly = ax >> 27, ax & low, ay >> 27, ay & low
+    e = ex + ey
+    m = np.concatenate([sign * hx * hy, sign * (hx * ly), sign * (lx * hy), sign * lx * ly])
+    return _fixed_point(m, np.concatenate([e + 54, e + 27, e + 27, e]))
+
+
+def exact_sum(x, comm=None) -> float:
+    """The sum over all ranks of every rank's entries of `x` (each entry counted once: pass owned
+    values only), correctly rounded: independent of the number of ranks and the partition."""
+    comm = get_comm(comm)
+    total = local_fixed_point_sum(x)
+    if not is_serial(comm):
+        total = sum(comm.allgather(total))
+    return _round(total)
+
+
+def exact_dot(x, y, comm=None) -> float:
+    """sum over all ranks of x . y (owned entries), correctly rounded: the exact products are
+    summed exactly; independent of the number of ranks and the partition."""
+    comm = get_comm(comm)
+    total = local_fixed_point_dot(x, y)
+    if not is_serial(comm):
+        total = sum(comm.allgather(total))
+    return _round(total)
+
+
+def exact_norm(x, comm=None) -> float:
+    """The Euclidean norm from exact_dot (one rounding in the sum of squares, one in the root)."""
+    return float(np.sqrt(exact_dot(x, x, comm)))
+
+
+@dataclass
+class Halo:
+    """Who sends which owned nodes to whom, and where the ghosts of each owner are received: local
+    node indices, per neighbour rank in ascending rank order, each list in ascending global id.
+
+    update(v) gives every ghost row of v (n_local, ...) its owner's value, in one neighbourhood
+    collective (MPI_Neighbor_alltoallv on a distributed graph of the neighbours), always in the same
+    order: the result does not depend on message timing."""
+
+    comm: object
+    sources: List[int]                       # ranks this one receives ghosts from
+    destinations: List[int]                  # ranks this one sends owned values to
+    recv: Dict[int, np.ndarray] = field(default_factory=dict)   # source rank -> local ghost indices
+    send: Dict[int, np.ndarray] = field(default_factory=dict)   # destination rank -> local owned indices
+    _graph: object = None
+
+    @classmethod
+    def build(cls, comm, gid: np.ndarray, owner: np.ndarray) -> "Halo":
+        """The exchange lists of one level from each local node's global id (ascending) and owner
+        rank. Collective: each rank tells the owners which of their nodes it holds as ghosts."""
+        comm = get_comm(comm)
+        gid = np.asarray(gid, np.int64)
+        owner = np.asarray(owner, np.int64)
+        if np.any(np.diff(gid) <= 0):
+            raise ValueError("the global ids of a halo must be strictly increasing")
+        ghost = np.flatnonzero(owner != comm.rank)
+        recv = {int(r): ghost[owner[ghost] == r] for r in np.unique(owner[ghost])}
+        if is_serial(comm):
+            if recv:
+                raise ValueError(f"a serial halo has nodes owned by rank(s) {sorted(recv)}")
+            return cls(comm, [], [])
+        asked = comm.alltoall([gid[recv[r]] if r in recv else None for r in range(comm.size)])
+        send = {}
+        for r, want in enumerate(asked):
+            if want is None:
+                continue
+            idx = np.searchsorted(gid, want)
+            if np.any(idx >= len(gid)) or np.any(gid[np.minimum(idx, len(gid) - 1)] != want) or \
+                    np.any(owner[idx] != comm.rank):
+                raise RuntimeError(f"rank {r} holds ghosts that rank {comm.rank} does not own")
+            send[r] = idx
+        sources, destinations = sorted(recv), sorted(send)
+        graph = comm.Create_dist_graph_adjacent(sources, destinations, reorder=False)
+        return cls(comm, sources, destinations, recv, send, graph)
+
+    @property
+    def ghosts(self) -> np.ndarray:
+        """Local indices of all ghost nodes (by source rank, then global id)."""
+        parts = [self.recv[r] for r in self.sources]
+        return np.concatenate(parts) if parts else np.zeros(0, np.int64)
+
+    def update(self, values: np.ndarray) -> np.ndarray:
+        """Overwrite the ghost rows of `values` (rows = local nodes, any trailing shape, float64)
+        with the owners' rows, in place; returns `values`."""
+        if self._graph is None:
+            return values
+        MPI = mpi_module()
+        if values.dtype != np.float64 or not values.flags.c_contiguous:
+            raise TypeError("a halo exchanges C-contiguous float64 arrays")
+        width = int(np.prod(values.shape[1:], dtype=np.int64))
+        rows = values.reshape(len(values), width)
+        send_counts = [len(self.send[r]) * width for r in self.destinations]
+        recv_counts = [len(self.recv[r]) * width for r in self.sources]
+        sendbuf = np.concatenate([rows[self.send[r]].ravel() for r in self.destinations]) if self.destinations \
+            else np.zeros(0)
+        recvbuf = np.empty(sum(recv_counts))
+        self._graph.Neighbor_alltoallv([sendbuf, (send_counts, None), MPI.DOUBLE],
+                                       [recvbuf, (recv_counts, None), MPI.DOUBLE])
+        start = 0
+        for r, c in zip(self.sources, recv_counts):
+            rows[self.recv[r]] = recvbuf[start:start + c].reshape(-1, width)
+            start += c
+        return values
+
+    def free(self) -> None:
+        """Release the neighbourhood communicator."""
+        if self._graph is not None:
+            self._graph.Free()
+            self._graph = None

@@ -1,0 +1,40 @@
+"""The distributed pieces on 1-4 ranks (oversubscribed on a small machine), each rank count in one
+mpirun launch of mpi_checks.py: hierarchy equal to the serial one, halo exchange, exact sums,
+partition-independent colouring; and failures on one rank that end every rank."""
+import pytest
+
+from mpi_launch import missing, run_ranks
+
+pytestmark = [pytest.mark.mpi, pytest.mark.skipif(bool(missing()), reason=missing() or "MPI available")]
+
+CELLS = ("triangle", "quad", "tetra", "hexahedron")
+
+
+@pytest.mark.parametrize("ranks", [1, 2, 3, 4])
+def test_distributed_checks_on_ranks(ranks):
+    r = run_ranks(ranks, "all")
+    assert r.returncode == 0, f"mpirun -n {ranks} failed (exit {r.returncode}):\n{r.stdout}\n{r.stderr}"
+    lines = set(r.stdout.splitlines())
+    checks = ("hierarchy", "halo", "prolongation", "colouring")
+    expected = {f"OK {check} {cell}" for check in checks for cell in CELLS}
+    expected |= {f"OK {check} {variant}" for check in checks
+                 for variant in ("triangle scattered", "tetra scattered", "quad bisection")}
+    expected |= {"OK hierarchy ball", "OK halo ball", "OK sums", "ALL OK"}
+    assert expected <= lines, f"missing: {sorted(expected - lines)}\n{r.stdout}"
+    # rank 0 alone reports
+    assert r.stdout.count("ALL OK") == 1
+
+
+@pytest.mark.parametrize("ranks", [2, 3])
+def test_bad_input_on_one_rank_ends_every_rank_with_its_message(ranks):
+    r = run_ranks(ranks, "error", timeout=30)
+    assert r.returncode != 0
+    for rank in range(ranks):
+        assert f"rank {rank} stops: rank 1: ValueError: bad input on this rank" in r.stdout, r.stdout + r.stderr
+
+
+def test_unguarded_failure_ends_every_rank():
+    # the other ranks wait in a barrier that rank 1 never reaches: MPI_Abort must end them
+    r = run_ranks(3, "uncaught", timeout=30)
+    assert r.returncode != 0
+    assert "rank 1: Traceback" in r.stderr and "an unguarded failure on one rank" in r.stderr, r.stderr
