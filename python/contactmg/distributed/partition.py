@@ -74,8 +74,8 @@ def partition_cells(mesh: Mesh, parts: int, method: Optional[str] = None) -> np.
             import pymetis
         except ImportError:
             if method == "metis":
-                raise ImportError("partitioning by METIS needs pymetis (pip install pymetis, or the package's "
-                                  "'mpi' extra)") from None
+                raise ImportError("partitioning by METIS needs pymetis (a dependency of the "
+                                  "package: pip install pymetis)") from None
             pymetis = None
         if pymetis is not None:
             xadj, adjncy = dual_graph(mesh)

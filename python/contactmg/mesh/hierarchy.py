@@ -55,14 +55,6 @@ def bytes_per_node(mesh: Mesh) -> int:
 FINE_MESH_KINDS = ("coarsening", "aggregation")
 
 
-def _transfer_of(P) -> "Transfer":
-    """A Transfer from a scipy sparse prolongation (fine x coarse)."""
-    P = P.tocsr()
-    P.sort_indices()
-    return Transfer(P.shape[0], P.shape[1], P.indptr.astype(np.int64), P.indices.astype(np.int64),
-                    P.data.astype(float))
-
-
 @dataclass
 class Transfer:
     """Nodal interpolation from one level to the next: fine node i is the sum of
@@ -73,6 +65,17 @@ class Transfer:
     ptr: np.ndarray
     parent: np.ndarray
     weight: np.ndarray
+
+    @classmethod
+    def from_matrix(cls, P) -> "Transfer":
+        """The transfer of a sparse prolongation matrix P (fine x coarse; scipy), zero weights dropped."""
+        import scipy.sparse as sp
+
+        P = sp.csr_matrix(P)
+        P.eliminate_zeros()
+        P.sort_indices()
+        return cls(P.shape[0], P.shape[1], P.indptr.astype(np.int64), P.indices.astype(np.int64),
+                   P.data.astype(float))
 
     def as_tuple(self) -> Tuple:
         """The transfer as the core takes it: (n_fine, n_coarse, ptr, parent, weight)."""
@@ -284,7 +287,7 @@ class MeshHierarchy:
             raise TypeError(f"mesh must be a Mesh, got {type(mesh).__name__}")
         t0 = time.perf_counter()
         _core.check_cells(mesh.points, mesh.cells, mesh.cell_type)
-        transfers = [_transfer_of(P) for P in prolongations()]
+        transfers = [Transfer.from_matrix(P) for P in prolongations()]
         return cls([mesh], transfers, time.perf_counter() - t0, kind=kind)
 
     @property

@@ -568,7 +568,7 @@ class Problem:
             P = sp.block_diag([b.hierarchy.transfers[l].matrix() for b in self.bodies], format="csr")
             if l == levels - 2:
                 P = (sp.identity(P.shape[0]) - self.N) @ P
-            out.append(_scalar_transfer(P))
+            out.append(Transfer.from_matrix(P))
         return out
 
     def _assemble_matrix(self):
@@ -706,7 +706,7 @@ class Problem:
         below = coarsening_prolongations(coarse, coarsest=COARSEN_DOWN_TO_NODES)
         if not below:
             return
-        self.transfers = [_scalar_transfer(P) for P in below] + self.transfers
+        self.transfers = [Transfer.from_matrix(P) for P in below] + self.transfers
         self._levels_below = len(below)
         made = (f"{len(below)} coarser levels were made from it by geometric coarsening, down to "
                 f"{below[0].shape[1] * coarse.dim:,} dofs")
@@ -780,16 +780,6 @@ def _block_matrix(A, d: int):
     cls = _core.BlockMatrix2D if d == 2 else _core.BlockMatrix3D
     n = B.shape[0] // d
     return cls(n, n, B.indptr.astype(np.int64), B.indices.astype(np.int64), np.ascontiguousarray(B.data))
-
-
-def _scalar_transfer(P) -> Transfer:
-    import scipy.sparse as sp  # only several bodies need it (a one-body process need not load scipy)
-    P = sp.csr_matrix(P)
-    P.eliminate_zeros()
-    P.sort_indices()
-    return Transfer(P.shape[0], P.shape[1], P.indptr.astype(np.int64), P.indices.astype(np.int64),
-                    P.data.astype(float))
-
 
 
 def _union_mesh(meshes: Sequence[Mesh], offsets: np.ndarray) -> Mesh:

@@ -1,12 +1,12 @@
-"""Coarse spaces from one fine mesh by geometric coarsening: nested node sets, nonnegative
-barycentric interpolation between non-nested levels; the monotone multigrid's requirements hold and
-the solver on them finds the geometric hierarchy's answer."""
+"""Coarse spaces from one fine mesh: geometric coarsening (nested node sets, nonnegative barycentric
+interpolation between non-nested levels) and nonnegative smoothed aggregation. The monotone
+multigrid's requirements hold on both, and the solver on them finds the geometric hierarchy's answer."""
 import numpy as np
 import pytest
 
 import contactmg as cm
 from contactmg.examples import hertz, sphere
-from contactmg.mesh.aggregation import node_graph
+from contactmg.mesh.aggregation import aggregation_prolongations, node_graph, pairwise_matching
 from contactmg.mesh.coarsening import (barycentric_prolongation, coarsening_prolongations, independent_set,
                                        node_classes)
 from contactmg.results.checks import contact_conditions
@@ -17,25 +17,31 @@ def hertz6():
     return hertz.hertz_problem("triangle", 6, 0.4)
 
 
-def _on(problem, hierarchy, friction=None):
+SPACES = {"coarsening": cm.MeshHierarchy.coarsened, "aggregation": cm.MeshHierarchy.aggregated}
+
+
+def _on(problem, space, friction=None):
+    """`problem` on the coarse space `space` made from its fine mesh alone."""
     b = problem.bodies[0]
-    return cm.Problem(cm.Body(hierarchy, b.material, b.dirichlet, contact_tags=b.contact_tags),
+    return cm.Problem(cm.Body(SPACES[space](problem.mesh), b.material, b.dirichlet, contact_tags=b.contact_tags),
                       obstacle=problem.obstacle, friction=friction or problem.friction)
 
 
 @pytest.mark.parametrize("mesh", [hertz.hertz_problem("triangle", 5, 0.4).mesh, hertz.hertz_problem("quad", 5, 0.4).mesh,
                                   cm.box(6, 5, 4, cell="tetra"), cm.box(6, 5, 4, cell="hexahedron")],
                          ids=["triangle", "quad", "tetra", "hexahedron"])
-def test_prolongations_are_sparse_nonnegative_partitions_of_unity(mesh):
-    Ps = coarsening_prolongations(mesh, coarsest=40)
+@pytest.mark.parametrize("space", ["coarsening", "aggregation"])
+def test_prolongations_are_nonnegative_partitions_of_unity(mesh, space):
+    Ps = (coarsening_prolongations if space == "coarsening" else aggregation_prolongations)(mesh, coarsest=40)
     assert Ps and Ps[-1].shape[0] == mesh.num_points and Ps[0].shape[1] <= 40
     for coarse, fine in zip(Ps[:-1], Ps[1:]):
         assert fine.shape[1] == coarse.shape[0]            # consecutive levels chain up
     for P in Ps:
         assert P.data.min() >= 0.0
         assert np.allclose(np.asarray(P.sum(axis=1)).ravel(), 1.0, rtol=0, atol=1e-13)
-        assert np.diff(P.indptr).max() <= mesh.dim + 1     # a simplex's corners at most
-        assert P.shape[1] <= 0.6 * P.shape[0]              # every level coarsens
+        if space == "coarsening":
+            assert np.diff(P.indptr).max() <= mesh.dim + 1  # a simplex's corners at most
+        assert P.shape[1] <= 0.6 * P.shape[0]               # every level coarsens
         assert np.all(np.asarray(P.sum(axis=0)).ravel() > 0)  # every coarse function is used
 
 
@@ -82,23 +88,24 @@ def test_the_outline_is_kept_first():
     assert set(np.flatnonzero(corner)) <= set(kept)        # corners stay coarse nodes
 
 
-def test_the_answer_of_the_geometric_hierarchy_from_the_fine_mesh_alone(hertz6):
-    h = cm.MeshHierarchy.coarsened(hertz6.mesh)
-    assert h.kind == "coarsening" and h.from_fine_mesh and h.levels >= 3 and h.finest is hertz6.mesh
-    p = _on(hertz6, h)
+@pytest.mark.parametrize("space", ["coarsening", "aggregation"])
+def test_the_answer_of_the_geometric_hierarchy_from_the_fine_mesh_alone(hertz6, space):
+    p = _on(hertz6, space)
+    h = p.hierarchy
+    assert h.kind == space and h.from_fine_mesh and h.levels >= 3 and h.finest is hertz6.mesh
     res = p.solve(tol=1e-11)
     ref = hertz6.solve()
-    assert res.converged and res.cycles <= ref.cycles + 3
+    assert res.converged and res.cycles <= (ref.cycles + 3 if space == "coarsening" else 30)
     assert np.abs(res.displacement - ref.displacement).max() <= 1e-9 * np.abs(ref.displacement).max()
     assert contact_conditions(p, res)["max"] < 1e-8
 
 
-def test_every_cycle_lowers_the_energy_with_the_new_coarse_spaces(hertz6):
+@pytest.mark.parametrize("space", ["coarsening", "aggregation"])
+def test_every_cycle_lowers_the_energy_with_the_new_coarse_spaces(hertz6, space):
     """Tresca friction: a convex energy that the monotone multigrid minimizes; it must not rise in
-    any cycle on the coarsened spaces either (nonnegative weights keep the coarse obstacles below the
+    any cycle on these coarse spaces either (nonnegative weights keep the coarse obstacles below the
     fine ones)."""
-    p = _on(hertz6, cm.MeshHierarchy.coarsened(hertz6.mesh), cm.Tresca(0.05))
-    res = p.solve(tol=0.0, rtol=1e-12, method="nmg")
+    res = _on(hertz6, space, cm.Tresca(0.05)).solve(tol=0.0, rtol=1e-12, method="nmg")
     assert res.converged
     e = np.asarray(res.history["energy"])
     # once converged the energy changes by its own evaluation's round-off (a sum over all dofs)
@@ -106,13 +113,24 @@ def test_every_cycle_lowers_the_energy_with_the_new_coarse_spaces(hertz6):
     assert e[-1] < e[0]
 
 
-def test_a_3d_mesh_alone():
+@pytest.mark.parametrize("space", ["coarsening", "aggregation"])
+def test_a_3d_mesh_alone(space):
     geo = sphere.sphere_problem("tetra", 2, 0.4)
-    p = _on(geo, cm.MeshHierarchy.coarsened(geo.mesh))
-    res = p.solve(tol=1e-11)
+    res = _on(geo, space).solve(tol=1e-11)
     ref = geo.solve()
-    assert res.converged and res.cycles <= ref.cycles + 3
+    assert res.converged and res.cycles <= (ref.cycles + 3 if space == "coarsening" else 30)
     assert np.abs(res.displacement - ref.displacement).max() <= 1e-8 * np.abs(ref.displacement).max()
+
+
+def test_matching_pairs_neighbours_only():
+    mesh = cm.rectangle(5, 4, cell="quad")
+    G = node_graph(mesh.cells, mesh.num_points)
+    agg, m = pairwise_matching(G)
+    for a in range(m):
+        members = np.flatnonzero(agg == a)
+        assert 1 <= len(members) <= 2
+        if len(members) == 2:
+            assert G[members[0], members[1]] == 1
 
 
 def test_no_coarse_meshes_to_ask_for_and_bad_sizes(hertz6):
@@ -123,6 +141,10 @@ def test_no_coarse_meshes_to_ask_for_and_bad_sizes(hertz6):
         coarsening_prolongations(hertz6.mesh, coarsest=2)
     with pytest.raises(TypeError, match="mesh must be a Mesh"):
         cm.MeshHierarchy.coarsened(hertz6.mesh.points)
+    with pytest.raises(ValueError, match=r"made from the fine mesh alone \(aggregation\) has none"):
+        cm.MeshHierarchy.aggregated(hertz6.mesh).truncated(2)
+    with pytest.raises(ValueError, match=r"omega must lie in \[0, 1\]"):
+        aggregation_prolongations(hertz6.mesh, omega=1.5)
 
 
 @pytest.mark.parametrize("space", ["coarsening", "aggregation"])
@@ -130,10 +152,9 @@ def test_monotone_restriction_stays_a_bound(space):
     """Any coarse correction within the restricted bounds keeps every fine dof within its own: checked
     at the corners of the coarse box (the extreme corrections) through each level's prolongation."""
     from contactmg import _core
-    from contactmg.mesh.aggregation import aggregation_prolongations
 
     mesh = hertz.hertz_problem("triangle", 4, 0.4).mesh
-    Ps = coarsening_prolongations(mesh, 30) if space == "coarsening" else aggregation_prolongations(mesh, 30)
+    Ps = (coarsening_prolongations if space == "coarsening" else aggregation_prolongations)(mesh, 30)
     rng = np.random.default_rng(2)
     for P in Ps:
         nf, nc = P.shape
