@@ -8,7 +8,10 @@ hexahedra. Rank 0 prints "OK <check>" per check and "ALL OK" at the end; a faile
 which ends every rank (get_comm sets abort_on_uncaught on several ranks).
 MODE "error": rank 1 fails a guarded input check; every rank prints the error it gets.
 MODE "uncaught": rank 1 raises outside any guard while the others wait in a barrier: the hook that
-get_comm sets must end them."""
+get_comm sets must end them.
+MODE "output" (`mpi_checks.py output FOLDER N`): the finest level of a triangle and a tetrahedron
+hierarchy written as .pvtu and gathered .vtu into FOLDER (output_checks.write_fields); the test
+process checks the files."""
 import math
 import sys
 from fractions import Fraction
@@ -22,6 +25,7 @@ from contactmg.distributed.transfer import prolong
 from contactmg.mesh.generators import hertz_half_disk, hertz_projector
 from contactmg.mesh.generators_3d import ball_projector, box, half_ball
 from contactmg.mesh.hierarchy import MeshHierarchy
+from output_checks import MESHES as OUTPUT_MESHES, write_fields
 
 LEVELS = 3
 # (coarse mesh, boundary projector): the half disks' new nodes on the arc are projected onto it
@@ -162,7 +166,7 @@ def check_colouring(comm, name, d, h):
     rank0_print(f"OK colouring {name}", comm=comm)
 
 
-def main(mode, ranks):
+def main(mode, ranks, *args):
     comm = get_comm()
     if comm.size != ranks:
         # a launcher of another MPI than mpi4py's starts separate one-rank programs
@@ -177,6 +181,11 @@ def main(mode, ranks):
         except DistributedError as e:
             print(f"rank {comm.rank} stops: {e}", flush=True)
             sys.exit(3)
+        return
+    if mode == "output":
+        for name in OUTPUT_MESHES:
+            write_fields(args[0], name, comm)
+            rank0_print(f"OK output {name}", comm=comm)
         return
     if mode == "uncaught":
         if comm.rank == min(1, comm.size - 1):
@@ -212,4 +221,4 @@ def main(mode, ranks):
 
 
 if __name__ == "__main__":
-    main(sys.argv[1], int(sys.argv[2]))
+    main(sys.argv[1], int(sys.argv[-1]), *sys.argv[2:-1])

@@ -1,9 +1,11 @@
 """The distributed pieces on 1-4 ranks (oversubscribed on a small machine), each rank count in one
 mpirun launch of mpi_checks.py: hierarchy equal to the serial one, halo exchange, exact sums,
-partition-independent colouring; and failures on one rank that end every rank."""
+partition-independent colouring; distributed output (.pvtu pieces and the gathered .vtu) equal to
+the serial mesh; and failures on one rank that end every rank."""
 import pytest
 
 from mpi_launch import missing, run_ranks
+from output_checks import MESHES as OUTPUT_MESHES, check_files
 
 pytestmark = [pytest.mark.mpi, pytest.mark.skipif(bool(missing()), reason=missing() or "MPI available")]
 
@@ -23,6 +25,15 @@ def test_distributed_checks_on_ranks(ranks):
     assert expected <= lines, f"missing: {sorted(expected - lines)}\n{r.stdout}"
     # rank 0 alone reports
     assert r.stdout.count("ALL OK") == 1
+
+
+@pytest.mark.parametrize("ranks", [2, 3])
+def test_pvtu_and_gathered_vtu_on_ranks_equal_the_serial_mesh(ranks, tmp_path):
+    r = run_ranks(ranks, "output", str(tmp_path))
+    assert r.returncode == 0, f"mpirun -n {ranks} failed (exit {r.returncode}):\n{r.stdout}\n{r.stderr}"
+    for name in OUTPUT_MESHES:
+        assert f"OK output {name}" in r.stdout.splitlines(), r.stdout
+        check_files(str(tmp_path), name, ranks)
 
 
 @pytest.mark.parametrize("ranks", [2, 3])
