@@ -100,6 +100,7 @@ inline py::dict history_to_dict(const std::vector<CycleRecord>& H) {
 // The parts of the module, each binding its subject.
 void bind_fem(py::module_& m);
 void bind_solver(py::module_& m);
+void bind_local_levels(py::module_& m);
 void bind_testing(py::module_& m);
 
 }  // namespace cmg::bindings

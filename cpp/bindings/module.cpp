@@ -1,4 +1,5 @@
-// The compiled core of contactmg: the module, its parts by subject (bind_fem.cpp, bind_solver.cpp)
+// The compiled core of contactmg: the module, its parts by subject (bind_fem.cpp, bind_solver.cpp,
+// bind_local_levels.cpp: one rank's part of a distributed cycle)
 // and the submodule `testing` of the entry points only tests and benchmarks call (bind_testing.cpp).
 #include <cstdlib>  // defines __GLIBC__ where it is glibc
 #ifdef __GLIBC__
@@ -20,6 +21,7 @@ PYBIND11_MODULE(_core, m) {
 #endif
   bind_fem(m);
   bind_solver(m);
+  bind_local_levels(m);
   m.def("openmp", [] { return have_openmp(); }, "whether the core was built with OpenMP threads");
   m.def("max_threads", [] { return max_threads(); }, "the cores the threads of a solve may use (threads=0)");
   py::module_ testing = m.def_submodule("testing", "entry points for tests and benchmarks: the core's pieces on their own");

@@ -1,0 +1,213 @@
+// One rank's part of a distributed cycle (python/contactmg/distributed/cycle.py): its fine level as a
+// ContactProblem over its nodes and one layer of ghosts, swept on a given set of rows (the owned rows
+// of one colour, between two ghost exchanges) and linearized node by node; a coarse level's projected
+// Gauss-Seidel on a given set of rows. The rows are those of the serial kernels: a distributed sweep
+// does at each row what the serial sweep does there.
+#include <algorithm>
+#include "bindings/common.hpp"
+#include "laws/law.hpp"
+#include "steps/nonlinear_gauss_seidel.hpp"
+
+namespace cmg::bindings {
+
+namespace {
+
+template <class T>
+T* writable(py::array_t<T>& a, const char* name, py::ssize_t size) {
+  if (!(a.flags() & py::array::c_style) || !a.writeable())
+    throw InputError(std::string(name) + " must be a writable C-contiguous array");
+  if (a.size() != size) throw InputError(std::string(name) + " has " + std::to_string(a.size()) + " entries, " + std::to_string(size) + " expected");
+  return a.mutable_data();
+}
+
+std::vector<Index> row_list(const IArr& rows, Index n) {
+  std::vector<Index> out(rows.data(), rows.data() + rows.size());
+  for (Index i : out)
+    if (i < 0 || i >= n) throw InputError("a row to sweep (" + std::to_string(i) + ") is outside 0.." + std::to_string(n - 1));
+  return out;
+}
+
+// The fine level of one rank: the matrix of its local cells (owned rows complete, ghost rows partial
+// and never swept), its load, Dirichlet data and contact nodes (owned and ghost: an owned row reads
+// its ghost neighbours in their contact frames).
+template <int d>
+struct LocalContactLevel {
+  Law law;
+  ContactProblem<d> P;
+
+  LocalContactLevel(const BlockMatrix<d>& A, DArr f, BArr fixed, DArr fixed_values, IArr nodes, DArr normals, DArr gaps,
+                    DArr coefficients, const std::string& law_name)
+      : law(parse_law(law_name)), P(make(A, f, fixed, fixed_values, nodes, normals, gaps, coefficients)) {
+    if (law == Law::Tresca) P.set_bounds_to_coefficients();
+    if (law == Law::Coulomb) throw InputError("Coulomb friction is not distributed yet: solve it on one rank");
+  }
+
+  static ContactProblem<d> make(const BlockMatrix<d>& A, DArr f, BArr fixed, DArr fixed_values, IArr nodes, DArr normals, DArr gaps,
+                                DArr coefficients) {
+    const Index n = A.rows, nc = (Index)nodes.size();
+    require_shape(f, "f", {(py::ssize_t)n, d});
+    require_shape(fixed, "fixed", {(py::ssize_t)n, d});
+    require_shape(fixed_values, "fixed_values", {(py::ssize_t)n, d});
+    require_shape(normals, "normals", {(py::ssize_t)nc, d});
+    require_shape(gaps, "gaps", {(py::ssize_t)nc});
+    require_shape(coefficients, "coefficients", {(py::ssize_t)nc});
+    std::vector<Index> cn(nodes.data(), nodes.data() + nc);
+    return ContactProblem<d>(A, f.data(), fixed.data(), fixed_values.data(), cn, normals.data(), gaps.data(), coefficients.data());
+  }
+
+  Index n() const { return P.num_nodes(); }
+
+  void sweep(py::array_t<double>& u, const IArr& rows, bool forward, double omega) {
+    double* x = writable(u, "u", n() * d);
+    if (!(omega > 0 && omega < 2)) throw InputError("omega must lie in (0, 2)");
+    const SweepOrder order(row_list(rows, n()));
+    py::gil_scoped_release free;
+    with_law(law, [&](auto L) { NonlinearGaussSeidel<d, decltype(L)>::sweep(P, x, forward, order, omega); });
+  }
+
+  // f - A u on `rows` (zero elsewhere)
+  py::array_t<double> residual(const DArr& u, const IArr& rows) const {
+    require_shape(u, "u", {(py::ssize_t)n(), d});
+    py::array_t<double> r({(py::ssize_t)n(), (py::ssize_t)d});
+    std::fill(r.mutable_data(), r.mutable_data() + n() * d, 0.0);
+    const BlockMatrix<d>& A = P.matrix();
+    for (Index i : row_list(rows, n())) A.residual_row(A.values.data(), u.data(), P.load().data(), i, 0, r.mutable_data() + d * i);
+    return r;
+  }
+
+  // The law's linearization at the contact nodes listed in `contacts` (indices into the contact list):
+  // the truncation mask (every node: the Dirichlet mask, the contact rows' own where linearized), the
+  // correction bounds and Hessian blocks (per contact node), the friction gradient added into r.
+  py::tuple linearize(const DArr& u, py::array_t<double>& r, const IArr& contacts) const {
+    require_shape(u, "u", {(py::ssize_t)n(), d});
+    double* rr = writable(r, "r", n() * d);
+    const Index nc = P.num_contact();
+    py::array_t<std::uint8_t> mask({(py::ssize_t)n(), (py::ssize_t)d});
+    std::copy(P.base_mask().begin(), P.base_mask().end(), mask.mutable_data());
+    std::vector<double> lo(nc * d, -kInf), hi(nc * d, kInf), H(nc * d * d, 0.0);
+    bool bounded = false;
+    if (law != Law::Linear)
+      for (Index c : row_list(contacts, nc)) {
+        const Index k = P.contact_node(c) * d;
+        Mat<d> Hc = Mat<d>::Zero();
+        const auto body = [&](auto L) {
+          return linearize_node<decltype(L), d>(P.node(c), u.data() + k, rr + k, mask.mutable_data() + k, P.base_mask().data() + k,
+                                                lo.data() + c * d, hi.data() + c * d, &Hc, P.matrix().block(P.matrix().diag[P.contact_node(c)]));
+        };
+        if (with_law(law, body)) bounded = true;
+        std::copy(Hc.data(), Hc.data() + d * d, H.data() + c * d * d);
+      }
+    return py::make_tuple(mask, to_numpy(lo, {(py::ssize_t)nc, d}), to_numpy(hi, {(py::ssize_t)nc, d}),
+                          to_numpy(H, {(py::ssize_t)nc, d, d}), bounded);
+  }
+
+  // per contact node in `contacts`: state (0 free, 1 stick, 2 slip) and friction energy
+  py::tuple contact_state(const DArr& u, const DArr& r, const IArr& contacts) const {
+    require_shape(u, "u", {(py::ssize_t)n(), d});
+    require_shape(r, "r", {(py::ssize_t)n(), d});
+    const std::vector<Index> cs = row_list(contacts, P.num_contact());
+    std::vector<std::int8_t> state(cs.size(), 0);
+    std::vector<double> energy(cs.size(), 0.0);
+    for (std::size_t m = 0; m < cs.size(); ++m) {
+      const Index c = cs[m], k = P.contact_node(c) * d;
+      state[m] = (std::int8_t)node_state<d>(P.node(c), u.data() + k);
+      energy[m] = with_law(law, [&](auto L) -> double {
+        if constexpr (decltype(L)::has_contact) return friction_energy<decltype(L), d>(P.node(c), u.data() + k, r.data()[k]);
+        else return 0.0;
+      });
+    }
+    return py::make_tuple(to_numpy(state, {(py::ssize_t)cs.size()}), to_numpy(energy, {(py::ssize_t)cs.size()}));
+  }
+
+  py::array_t<double> frames() const {
+    const auto& T = P.basis();
+    py::array_t<double> Q({(py::ssize_t)T.num_blocks(), (py::ssize_t)d, (py::ssize_t)d});
+    for (Index c = 0; c < T.num_blocks(); ++c)
+      for (int a = 0; a < d; ++a)
+        for (int b = 0; b < d; ++b) Q.mutable_data()[(c * d + a) * d + b] = T.block(c)(a, b);
+    return Q;
+  }
+
+  py::array_t<double> to_canonical(const DArr& u) const {
+    require_shape(u, "u", {(py::ssize_t)n(), d});
+    std::vector<double> v(u.data(), u.data() + n() * d);
+    P.basis().to_canonical(v.data());
+    return to_numpy(v, {(py::ssize_t)n(), d});
+  }
+};
+
+// A coarse level's rows on one rank (owned rows complete, ghost rows empty): block and projected
+// Gauss-Seidel on given rows, with the inverted diagonal blocks of level_smoothers.hpp. `scale` (the
+// largest diagonal entry of the whole level, the same on every rank) sets the inert-dof threshold.
+template <int d>
+struct LocalLevelSmoother {
+  BlockMatrix<d> A;
+  std::vector<double> Dinv;
+  std::vector<std::uint8_t> inert;
+
+  LocalLevelSmoother(const BlockMatrix<d>& M, double scale) : A(M) { invert_diagonal<d>(A, Dinv, inert, scale); }
+
+  void sweep(py::array_t<double>& x, const DArr& b, const IArr& rows, bool forward, double omega, py::object lo, py::object hi,
+             py::object bounded) {
+    const Index n = A.rows;
+    if (!(omega > 0 && omega < 2)) throw InputError("omega must lie in (0, 2)");
+    double* xx = writable(x, "x", n * d);
+    require_shape(b, "b", {(py::ssize_t)n, d});
+    const SweepOrder order = rows.size() == n && rows.data()[0] == 0 && rows.data()[n - 1] == n - 1 && std::is_sorted(rows.data(), rows.data() + n)
+                                 ? SweepOrder()
+                                 : SweepOrder(row_list(rows, n));
+    if (lo.is_none()) {
+      py::gil_scoped_release free;
+      block_gs_sweep<d>(A, Dinv, b.data(), xx, forward, order, omega);
+      return;
+    }
+    const DArr l = lo.cast<DArr>(), h = hi.cast<DArr>();
+    const BArr bd = bounded.cast<BArr>();
+    require_shape(l, "lo", {(py::ssize_t)n, d});
+    require_shape(h, "hi", {(py::ssize_t)n, d});
+    require_shape(bd, "bounded", {(py::ssize_t)n});
+    const std::vector<std::uint8_t> bv(bd.data(), bd.data() + n);
+    py::gil_scoped_release free;
+    projected_gs_sweep<d>(A, Dinv, bv, inert, l.data(), h.data(), b.data(), xx, forward, order, omega);
+  }
+};
+
+template <int d>
+void bind_local(py::module_& m) {
+  const std::string sfx = std::to_string(d) + "D";
+  using BM = BlockMatrix<d>;
+  using L = LocalContactLevel<d>;
+  py::class_<L>(m, ("LocalContactLevel" + sfx).c_str(), "One rank's fine level of a distributed solve")
+      .def(py::init([](const BM& A, DArr f, BArr fixed, DArr fixed_values, IArr nodes, DArr normals, DArr gaps, DArr coefficients,
+                       const std::string& law) { return new L(A, f, fixed, fixed_values, nodes, normals, gaps, coefficients, law); }),
+           py::arg("A"), py::arg("f"), py::arg("fixed"), py::arg("fixed_values"), py::arg("contact_nodes"), py::arg("normals"),
+           py::arg("gaps"), py::arg("coefficients"), py::arg("law"))
+      .def("sweep", &L::sweep, py::arg("u"), py::arg("rows"), py::arg("forward"), py::arg("omega") = 1.0,
+           "one nonlinear Gauss-Seidel pass over `rows` (in order, or reversed), u (n, d) in place")
+      .def("residual", &L::residual, py::arg("u"), py::arg("rows"), "f - A u on rows (zero elsewhere)")
+      .def("linearize", &L::linearize, py::arg("u"), py::arg("r"), py::arg("contacts"),
+           "(mask, lo, hi, hessian, bounded) at the given contact nodes; the friction gradient is added into r")
+      .def("contact_state", &L::contact_state, py::arg("u"), py::arg("r"), py::arg("contacts"))
+      .def("frames", &L::frames, "the contact frames Q (nc, d, d): local = Q^T canonical")
+      .def("to_canonical", &L::to_canonical, py::arg("u"))
+      .def_property_readonly("matrix", [](const L& l) { return std::make_shared<BM>(l.P.matrix()); },
+                             "T^T A T with the Dirichlet rows and columns eliminated")
+      .def_property_readonly("load", [](const L& l) { return to_numpy(l.P.load(), {(py::ssize_t)l.n(), d}); })
+      .def_property_readonly("base_mask", [](const L& l) { return to_numpy(l.P.base_mask(), {(py::ssize_t)l.n(), d}); });
+  using S = LocalLevelSmoother<d>;
+  py::class_<S>(m, ("LocalLevelSmoother" + sfx).c_str(), "A coarse level's Gauss-Seidel on one rank's rows")
+      .def(py::init([](const BM& A, double scale) { return new S(A, scale); }), py::arg("A"), py::arg("scale"))
+      .def("sweep", &S::sweep, py::arg("x"), py::arg("b"), py::arg("rows"), py::arg("forward"), py::arg("omega") = 1.0,
+           py::arg("lo") = py::none(),
+           py::arg("hi") = py::none(), py::arg("bounded") = py::none(),
+           "one block (or, with bounds, projected) Gauss-Seidel pass over rows, x (n, d) in place");
+}
+
+}  // namespace
+
+void bind_local_levels(py::module_& m) {
+  bind_local<2>(m);
+  bind_local<3>(m);
+}
+
+}  // namespace cmg::bindings

@@ -1,0 +1,373 @@
+"""The truncated monotone multigrid cycle on MPI ranks: the serial cycle's steps (steps/
+monotone_mg_step.hpp, mg/cycle.hpp) with each rank doing them on its owned rows and a ghost exchange
+where a row reads a neighbour's new value.
+
+- A Gauss-Seidel sweep runs colour by colour (colours of the hashed greedy rule, the same on any
+  number of ranks), the owned rows of a colour by the core's kernels, then one halo exchange.
+- Restriction: the owners of the fine rows form the residual, the ghosts get it, and the owner of a
+  coarse row sums its fine rows in ascending global id. Bounds restrict by minima and maxima (exact).
+- Prolongation: every local row (ghost rows are their owners' rows), so no exchange is needed.
+- Galerkin rows by their owners (operators.py), rebuilt when the truncation or a Hessian changes.
+- The coarsest level gathered and solved on every rank.
+- Norms and energies by exact sums.
+
+So every value is the same on every number of ranks: the iterates, cycle counts and norms are
+bitwise those of one rank."""
+from __future__ import annotations
+
+import time
+from typing import List, Optional
+
+import numpy as np
+import scipy.sparse as sp
+
+from .. import _core
+from .colouring import colour_level
+from .comm import is_serial, op
+from .exchange import exact_dot, exact_sum
+from .operators import (GatheredCoarsest, galerkin_rows, local_transfer, max_diagonal, node_to_dof_rows,
+                        rotate_rows, sorted_csr, to_block_matrix)
+
+INF = np.inf
+
+
+def _any(comm, flag: bool) -> bool:
+    return bool(flag) if is_serial(comm) else bool(comm.allreduce(int(bool(flag)), op=op(comm, "MAX")))
+
+
+def _colour_rows(comm, level) -> List[np.ndarray]:
+    """The owned rows of each colour, with the number of colours the largest over the ranks."""
+    colour = colour_level(level, comm)
+    owned = level.owner == level.rank
+    ncol = int(colour.max(initial=-1)) + 1
+    if not is_serial(comm):
+        ncol = comm.allreduce(ncol, op=op(comm, "MAX"))
+    return [np.flatnonzero(owned & (colour == c)).astype(np.int64) for c in range(ncol)]
+
+
+def restrict_bounds(P: sp.csr_matrix, lo: np.ndarray, hi: np.ndarray, n_coarse: int, d: int,
+                    rows: Optional[np.ndarray] = None):
+    """Monotone restriction (mg/bound_restriction.hpp) of the bounds lo <= c <= hi of the fine dofs
+    in `rows` (all where None; bounds flattened per dof, +-inf where none) through P: a coarse
+    correction within the returned bounds keeps every fine dof within its own."""
+    lo_c = np.full(n_coarse * d, -INF)
+    hi_c = np.full(n_coarse * d, INF)
+    lo, hi = lo.ravel(), hi.ravel()
+    dofs = np.flatnonzero(np.isfinite(lo) | np.isfinite(hi)) if rows is None else rows
+    dofs = dofs[np.isfinite(lo[dofs]) | np.isfinite(hi[dofs])]
+    if not len(dofs):
+        return lo_c.reshape(-1, d), hi_c.reshape(-1, d)
+    S = P[dofs]
+    counts = np.diff(S.indptr)
+    sigma = np.add.reduceat(np.abs(S.data), S.indptr[:-1]) if len(S.data) else np.zeros(len(dofs))
+    sigma = np.where(counts > 0, sigma, 0.0)
+    scale = 1.0 / np.maximum(1.0, sigma)
+    l_s, h_s = lo[dofs] * scale, hi[dofs] * scale
+    w, g = S.data, S.indices
+    lr, hr = np.repeat(l_s, counts), np.repeat(h_s, counts)
+    pos, neg = w > 0, w < 0
+    np.minimum.at(hi_c, g[pos], hr[pos])
+    np.maximum.at(lo_c, g[pos], lr[pos])
+    np.minimum.at(hi_c, g[neg], -lr[neg])
+    np.maximum.at(lo_c, g[neg], -hr[neg])
+    return lo_c.reshape(-1, d), hi_c.reshape(-1, d)
+
+
+class CoarseLevel:
+    """A coarse level on one rank: its nodes, colours, the transfer from the level below, its
+    Galerkin rows and the vectors of the cycle."""
+
+    def __init__(self, comm, level, below, d: int):
+        self.comm, self.level, self.d = comm, level, d
+        self.n = len(level.gid)
+        self.owned = level.owner == level.rank
+        self.owned_dofs = node_to_dof_rows(np.flatnonzero(self.owned), d)
+        self.halo = level.halo
+        self.colours = _colour_rows(comm, level)
+        self.P = local_transfer(level, below, d, comm) if below is not None else None  # from the level below
+        self.x = np.zeros((self.n, d))
+        self.b = np.zeros((self.n, d))
+        self.lo = np.full((self.n, d), -INF)
+        self.hi = np.full((self.n, d), INF)
+        self.bounded = np.zeros(self.n, np.uint8)
+        self.any_bounds = False
+        self.A = None
+        self.smoother = None
+
+    def set_matrix(self, A: sp.csr_matrix) -> None:
+        self.A = A
+        scale = max_diagonal(self.comm, A, self.owned_dofs)
+        cls = _core.LocalLevelSmoother2D if self.d == 2 else _core.LocalLevelSmoother3D
+        self.smoother = cls(to_block_matrix(A, self.d), scale)
+
+    def set_bounds(self, lo: np.ndarray, hi: np.ndarray) -> None:
+        """Restricted bounds: the owned rows' are complete, the ghosts' from their owners."""
+        self.lo, self.hi = lo, hi
+        if self.halo is not None:
+            both = np.ascontiguousarray(np.hstack([lo, hi]))
+            self.halo.update(both)
+            self.lo, self.hi = np.ascontiguousarray(both[:, :self.d]), np.ascontiguousarray(both[:, self.d:])
+
+    def set_bounded(self, bounded: bool) -> None:
+        b = bounded & (np.isfinite(self.lo).any(axis=1) | np.isfinite(self.hi).any(axis=1))
+        self.bounded = b.astype(np.uint8)
+        self.any_bounds = _any(self.comm, bounded and bool(b[self.owned].any()))
+
+    def sweep(self, forward: bool, omega: float) -> None:
+        order = self.colours if forward else self.colours[::-1]
+        for rows in order:
+            if self.any_bounds:
+                self.smoother.sweep(self.x, self.b, rows, forward, omega, self.lo, self.hi, self.bounded)
+            else:
+                self.smoother.sweep(self.x, self.b, rows, forward, omega)
+            if self.halo is not None:
+                self.halo.update(self.x)
+
+    def residual(self) -> np.ndarray:
+        """b - A x on the owned rows, the ghosts' from their owners."""
+        r = np.zeros((self.n, self.d))
+        r.ravel()[self.owned_dofs] = self.b.ravel()[self.owned_dofs] - (self.A @ self.x.ravel())[self.owned_dofs]
+        if self.halo is not None:
+            self.halo.update(r)
+        return r
+
+
+class CoarseCorrection:
+    """The coarse levels of one rank and the multilevel correction of the serial CoarseCycle."""
+
+    def __init__(self, comm, hierarchy, d: int, fine_transfer: sp.csr_matrix):
+        self.comm, self.d = comm, d
+        levels = hierarchy.levels
+        self.levels = [CoarseLevel(comm, levels[l], levels[l - 1] if l > 0 else None, d)
+                       for l in range(len(levels) - 1)]
+        self.fine_transfer = fine_transfer  # onto the fine level from the top coarse level (rotated rows)
+        self.coarsest: Optional[GatheredCoarsest] = None
+
+    def build(self, fine, A_fine: sp.csr_matrix, mask: np.ndarray) -> None:
+        """Every coarse matrix for the fine matrix (with the Hessian blocks) and truncation mask."""
+        top = len(self.levels) - 1
+        A = galerkin_rows(self.comm, fine.level, self.levels[top].level, A_fine, self.fine_transfer, mask, self.d)
+        for l in range(top, -1, -1):
+            L = self.levels[l]
+            L.set_matrix(A)
+            if l > 0:
+                below = self.levels[l - 1]
+                A = galerkin_rows(self.comm, L.level, below.level, A, L.P, np.ones(L.n * self.d), self.d)
+        self.coarsest = GatheredCoarsest(self.comm, self.levels[0].level, self.levels[0].A, self.d)
+
+    def correction(self, opt, r_fine: np.ndarray, mask: np.ndarray, lo_f: np.ndarray, hi_f: np.ndarray,
+                   bounded: bool) -> np.ndarray:
+        """w = M P c on every local fine row for the fine residual r (ghost rows fresh), the mask and
+        the fine correction bounds (+-inf where none; ghost rows fresh)."""
+        d, top = self.d, len(self.levels) - 1
+        C = self.levels[top]
+        P = self.fine_transfer
+        rm = (r_fine.ravel() * mask)
+        C.b[:] = 0.0
+        C.b.ravel()[C.owned_dofs] = (P.T @ rm)[C.owned_dofs]  # sums in ascending fine dof order
+        if C.halo is not None:
+            C.halo.update(C.b)
+        if bounded:
+            lo = np.where(mask > 0, lo_f.ravel(), -INF)
+            hi = np.where(mask > 0, hi_f.ravel(), INF)
+            C.set_bounds(*restrict_bounds(P, lo, hi, C.n, d))
+        else:
+            C.lo[:] = -INF
+            C.hi[:] = INF
+        C.set_bounded(bounded)
+        C.x[:] = 0.0
+        self._cycle(opt, top, opt.cycle)
+        if opt.cycle != "V":
+            self._cycle(opt, top, "V" if opt.cycle == "F" else "W")
+        return (P @ C.x.ravel()) * mask
+
+    def _cycle(self, opt, l: int, kind: str) -> None:
+        if l == 0:
+            self._solve_coarsest(opt)
+            return
+        L, C = self.levels[l], self.levels[l - 1]
+        for _ in range(opt.nu1):
+            L.sweep(True, opt.omega)
+        for v in range(1 if kind == "V" else 2):
+            r = L.residual()
+            C.b[:] = 0.0
+            C.b.ravel()[C.owned_dofs] = (L.P.T @ r.ravel())[C.owned_dofs]
+            if C.halo is not None:
+                C.halo.update(C.b)
+            if L.any_bounds:
+                rows = node_to_dof_rows(np.flatnonzero(L.bounded), self.d)
+                C.set_bounds(*restrict_bounds(L.P, L.lo - L.x, L.hi - L.x, C.n, self.d, rows))
+            else:
+                C.lo[:] = -INF
+                C.hi[:] = INF
+            C.set_bounded(L.any_bounds)
+            C.x[:] = 0.0
+            self._cycle(opt, l - 1, "V" if (kind == "F" and v == 1) else kind)
+            L.x += (L.P @ C.x.ravel()).reshape(-1, self.d)
+        for _ in range(opt.nu2):
+            L.sweep(False, opt.omega_post)
+
+    def _solve_coarsest(self, opt) -> None:
+        """The serial solve_coarsest: the exact solve; where it leaves the bounds, projected
+        Gauss-Seidel from the clamped solution (or from zero, whichever has the lower energy)."""
+        L, S, d = self.levels[0], self.coarsest, self.d
+        gid = L.level.gid
+        b = S.gather(L.b)
+        x = S.solve(b)
+        if L.any_bounds:
+            lo, hi = S.gather(L.lo), S.gather(L.hi)
+            if not np.all((x >= lo) & (x <= hi)):
+                x = np.maximum(lo, np.minimum(x, hi))
+                e = 0.5 * float(x @ (S.A @ x)) - float(b @ x)
+                if not e < 0:
+                    x[:] = 0.0
+                bounded = (np.isfinite(lo) | np.isfinite(hi)).reshape(-1, d).any(axis=1).astype(np.uint8)
+                if not hasattr(S, "smoother"):
+                    cls = _core.LocalLevelSmoother2D if d == 2 else _core.LocalLevelSmoother3D
+                    S.smoother = cls(to_block_matrix(S.A, d), S.scale)
+                    S.rows = np.arange(S.A.shape[0] // d, dtype=np.int64)
+                xb = x.reshape(-1, d).copy()
+                for s in range(50):
+                    before = xb.copy()
+                    S.smoother.sweep(xb, b.reshape(-1, d), S.rows, s % 2 == 0, opt.omega, lo.reshape(-1, d),
+                                     hi.reshape(-1, d), bounded)
+                    if np.max(np.abs(xb - before)) <= 1e-14 * np.max(np.abs(xb)):
+                        break
+                x = xb.ravel()
+        L.x[:] = x.reshape(-1, d)[gid]
+
+
+class DistributedMonotoneStep:
+    """One cycle of truncated monotone multigrid (frictionless, Tresca) on the ranks: nu1 nonlinear
+    sweeps, the linearization at the contact nodes, the coarse correction of the truncated problem,
+    nu2 sweeps back; returns ||u_new - u_old||_A (exact sums)."""
+
+    def __init__(self, comm, fine, hierarchy, opt):
+        self.comm, self.fine, self.opt = comm, fine, opt
+        d = self.d = fine.d
+        lev = fine.level
+        self.n = len(lev.gid)
+        self.owned = lev.owner == lev.rank
+        self.owned_dofs = node_to_dof_rows(np.flatnonzero(self.owned), d)
+        self.halo = lev.halo
+        self.colours = _colour_rows(comm, lev)
+        B = fine.core.matrix
+        self.A = sorted_csr(sp.bsr_matrix((B.data, B.indices, B.indptr), shape=B.shape).tocsr())
+        self.f = fine.core.load
+        P = local_transfer(lev, hierarchy.levels[-2], d, comm)
+        P = rotate_rows(P, fine.contact_nodes, fine.frames, d)
+        self.coarse = CoarseCorrection(comm, hierarchy, d, P)
+        self.built = None  # (mask, hessian) the coarse levels were built for
+        self.phase_seconds = {k: 0.0 for k in ("pre_smooth", "linearize", "coarse_update", "coarse_correction",
+                                               "post_smooth", "norm")}
+        self.notes = []
+        if fine.frames.size and not np.all(np.isin(np.round(np.abs(fine.frames), 15), (0.0, 1.0))):
+            self.notes.append("rotated contact frames: the plain truncated coarse correction (the serial solver "
+                              "projects it there)")
+
+    def memory_bytes(self) -> int:
+        """The bytes of this rank's matrices, transfers and fine vectors (arrays only)."""
+        def csr(M):
+            return 0 if M is None else M.data.nbytes + M.indices.nbytes + M.indptr.nbytes
+        total = csr(self.A) + csr(self.coarse.fine_transfer) + self.f.nbytes
+        for L in self.coarse.levels:
+            total += csr(L.A) + csr(L.P) + 5 * L.x.nbytes
+        return int(total)
+
+    def sweep(self, u: np.ndarray, forward: bool, omega: float) -> None:
+        order = self.colours if forward else self.colours[::-1]
+        for rows in order:
+            self.fine.core.sweep(u, rows, forward, omega)
+            if self.halo is not None:
+                self.halo.update(u)
+
+    def linearize(self, u: np.ndarray):
+        """mask (n*d), node bounds lo/hi (n, d; +-inf away from the contact nodes), the Hessian
+        blocks, whether any bound is finite, and the fine residual with the friction gradient; ghost
+        rows from their owners."""
+        fine, d = self.fine, self.d
+        owned_nodes = np.flatnonzero(self.owned).astype(np.int64)
+        r = fine.core.residual(u, owned_nodes)
+        mask, lo_c, hi_c, H, bounded = fine.core.linearize(u, r, fine.owned_contacts)
+        lo = np.full((self.n, d), -INF)
+        hi = np.full((self.n, d), INF)
+        lo[fine.contact_nodes] = lo_c
+        hi[fine.contact_nodes] = hi_c
+        table = np.hstack([mask.astype(float), lo, hi, r])
+        if self.halo is not None:
+            self.halo.update(table)
+        mask = table[:, :d].ravel()
+        lo, hi, r = table[:, d:2 * d], table[:, 2 * d:3 * d], np.ascontiguousarray(table[:, 3 * d:])
+        hess = H[fine.owned_contacts]
+        keep = np.abs(hess).reshape(len(hess), -1).max(axis=1, initial=0.0) > 0 if len(hess) else np.zeros(0, bool)
+        hess_nodes = fine.contact_nodes[fine.owned_contacts][keep]
+        return mask, lo, hi, hess_nodes, hess[keep], _any(self.comm, bounded), r
+
+    def fine_matrix_with(self, hess_nodes: np.ndarray, hess: np.ndarray) -> sp.csr_matrix:
+        if not len(hess_nodes):
+            return self.A
+        n, d = self.n, self.d
+        blocks = np.zeros((n, d, d))
+        blocks[hess_nodes] = hess
+        H = sp.bsr_matrix((blocks, np.arange(n), np.arange(n + 1)), shape=(n * d, n * d)).tocsr()
+        return sorted_csr(self.A + H)
+
+    def iterate(self, u: np.ndarray) -> float:
+        opt, ph = self.opt, self.phase_seconds
+        t = time.perf_counter()
+
+        def lap(name):
+            nonlocal t
+            now = time.perf_counter()
+            ph[name] += now - t
+            t = now
+
+        old = u.copy()
+        for _ in range(opt.nu1):
+            self.sweep(u, True, opt.omega)
+        lap("pre_smooth")
+        mask, lo, hi, hess_nodes, hess, bounded, r = self.linearize(u)
+        lap("linearize")
+        key = (mask, hess_nodes, hess)
+        changed = self.built is None or not (np.array_equal(mask, self.built[0]) and np.array_equal(hess_nodes, self.built[1])
+                                             and np.array_equal(hess, self.built[2]))
+        if _any(self.comm, changed):
+            self.coarse.build(self.fine, self.fine_matrix_with(hess_nodes, hess), mask)
+            self.built = key
+        lap("coarse_update")
+        w = self.coarse.correction(opt, r, mask, lo, hi, bounded)
+        u += w.reshape(-1, self.d)
+        lap("coarse_correction")
+        for _ in range(opt.nu2):
+            self.sweep(u, False, opt.omega_post)
+        lap("post_smooth")
+        du = (u - old).ravel()
+        Adu = self.A @ du
+        step = float(np.sqrt(max(exact_dot(du[self.owned_dofs], Adu[self.owned_dofs], self.comm), 0.0)))
+        lap("norm")
+        return step
+
+    def record(self, u: np.ndarray) -> dict:
+        """Energy (without the constant of the Dirichlet values), ||u||_A and the contact counts."""
+        uf = u.ravel()
+        Au = self.A @ uf
+        o = self.owned_dofs
+        e = exact_sum(np.concatenate([0.5 * uf[o] * Au[o], -self.f.ravel()[o] * uf[o]]), self.comm)
+        r = (self.f.ravel() - Au).reshape(-1, self.d)
+        state, fe = self.fine.core.contact_state(u, np.ascontiguousarray(r), self.fine.owned_contacts)
+        e += exact_sum(fe, self.comm)
+        counts = np.array([np.count_nonzero(state > 0), np.count_nonzero(state == 1), np.count_nonzero(state == 2)])
+        if not is_serial(self.comm):
+            counts = self.comm.allreduce(counts, op=op(self.comm, "SUM"))
+        norm = float(np.sqrt(max(exact_dot(uf[o], Au[o], self.comm), 0.0)))
+        return {"energy": e, "solution_norm": norm, "active": int(counts[0]), "stick": int(counts[1]),
+                "slip": int(counts[2])}
+
+    def sweep_change(self, u: np.ndarray) -> float:
+        """||S(u) - u||_A for one forward nonlinear sweep S (u unchanged)."""
+        v = u.copy()
+        self.sweep(v, True, self.opt.omega)
+        dv = (v - u).ravel()
+        Adv = self.A @ dv
+        o = self.owned_dofs
+        return float(np.sqrt(max(exact_dot(dv[o], Adv[o], self.comm), 0.0)))

@@ -1,0 +1,171 @@
+"""The operators of a distributed cycle on one rank, as scalar-dof sparse matrices over its local nodes
+(owned and ghost, in ascending global id): the prolongation rows of every local node, the Galerkin
+rows of every owned coarse node, and the coarsest level gathered onto every rank.
+
+Every sum is taken in an order that does not depend on the partition: a row's entries are stored by
+ascending global id (local indices ascend with it) and a product adds them in that order, so each
+row has the same bits on every number of ranks. A row that a rank needs but does not own (the
+prolongation and Galerkin rows of its ghost nodes) is computed by its owner and sent, never
+recomputed from a partial neighbourhood.
+
+Why the owner of a coarse node J has every fine row its Galerkin row needs: a fine node i with
+P_iJ != 0 lies in a coarse cell containing J, so i is a vertex of a fine cell containing J; every
+fine cell at an owned node is local (owned or in the ghost layer). Its row of (M A M) P reaches only
+coarse nodes that share a coarse cell with J, and those are local on the coarse level too."""
+from __future__ import annotations
+
+from typing import List, Tuple
+
+import numpy as np
+import scipy.sparse as sp
+
+from .comm import is_serial, op
+
+
+def node_to_dof_rows(nodes: np.ndarray, d: int) -> np.ndarray:
+    """The scalar dofs (node * d + a) of `nodes`, node-major."""
+    return (np.asarray(nodes, np.int64)[:, None] * d + np.arange(d)).ravel()
+
+
+def sorted_csr(M) -> sp.csr_matrix:
+    """CSR with sorted column indices (the product order of every later sum)."""
+    M = sp.csr_matrix(M)
+    M.sort_indices()
+    return M
+
+
+def keep_rows(M: sp.csr_matrix, keep: np.ndarray) -> sp.csr_matrix:
+    """M with every row not in the boolean mask `keep` (per scalar row) emptied; shape unchanged."""
+    return sorted_csr(sp.diags(keep.astype(float)) @ M)
+
+
+def exchange_ghost_rows(comm, halo, M: sp.csr_matrix, owned_nodes_mask: np.ndarray, col_gid: np.ndarray,
+                        d: int) -> sp.csr_matrix:
+    """M (rows: local nodes x d, columns: dofs of another level's local nodes, whose global ids are
+    col_gid) with the rows of the ghost nodes replaced by their owners' rows. Collective."""
+    if is_serial(comm) or halo is None or not (halo.sources or halo.destinations):
+        return sorted_csr(keep_rows(M, np.repeat(owned_nodes_mask, d)))
+    M = sorted_csr(M)
+    out = []
+    for r in range(comm.size):
+        if r not in halo.send:
+            out.append(None)
+            continue
+        rows = node_to_dof_rows(halo.send[r], d)
+        sub = M[rows]
+        cols = sub.indices.astype(np.int64)
+        out.append((sub.indptr.astype(np.int64), col_gid[cols // d] * d + cols % d, sub.data))
+    received = comm.alltoall(out)
+    own = keep_rows(M, np.repeat(owned_nodes_mask, d)).tocoo()
+    rows_all, cols_all, vals_all = [own.row.astype(np.int64)], [own.col.astype(np.int64)], [own.data]
+    for r, got in enumerate(received):
+        if got is None:
+            continue
+        ptr, gcols, vals = got
+        ghost_rows = node_to_dof_rows(halo.recv[r], d)
+        counts = np.diff(ptr)
+        J = np.searchsorted(col_gid, gcols // d)
+        if len(J) and (np.any(J >= len(col_gid)) or np.any(col_gid[np.minimum(J, len(col_gid) - 1)] != gcols // d)):
+            raise RuntimeError("a ghost row reaches a node this rank does not hold")  # pragma: no cover
+        rows_all.append(np.repeat(ghost_rows, counts))
+        cols_all.append(J * d + gcols % d)
+        vals_all.append(vals)
+    out_m = sp.csr_matrix((np.concatenate(vals_all), (np.concatenate(rows_all), np.concatenate(cols_all))),
+                          shape=M.shape)
+    return sorted_csr(out_m)
+
+
+def local_transfer(fine_level, coarse_level, d: int, comm) -> sp.csr_matrix:
+    """The prolongation onto every local fine node (scalar dofs; rows of ghost nodes from their owners)
+    from the local nodes of the level below."""
+    t = fine_level.transfer
+    n_f, n_c = len(fine_level.gid), len(coarse_level.gid)
+    counts = np.diff(t.ptr)
+    rows = np.repeat(np.asarray(t.rows, np.int64), counts)
+    Pn = sp.csr_matrix((np.asarray(t.weight, float), (rows, np.asarray(t.parent, np.int64))), shape=(n_f, n_c))
+    P = sorted_csr(sp.kron(Pn, sp.identity(d), format="csr"))
+    owned = fine_level.owner == fine_level.rank
+    return exchange_ghost_rows(comm, fine_level.halo, P, owned, coarse_level.gid, d)
+
+
+def rotate_rows(P: sp.csr_matrix, nodes: np.ndarray, frames: np.ndarray, d: int) -> sp.csr_matrix:
+    """T^{-1} P: the rows of the contact nodes in their frames (local = Q^T canonical)."""
+    n = P.shape[0] // d
+    blocks = np.tile(np.eye(d), (n, 1, 1))
+    blocks[np.asarray(nodes, np.int64)] = np.transpose(frames, (0, 2, 1))
+    R = sp.bsr_matrix((blocks, np.arange(n), np.arange(n + 1)), shape=(n * d, n * d)).tocsr()
+    return sorted_csr(R @ P)
+
+
+def galerkin_rows(comm, fine_level, coarse_level, A: sp.csr_matrix, P: sp.csr_matrix, mask: np.ndarray,
+                  d: int) -> sp.csr_matrix:
+    """The owned rows of P^T M A M P on the coarse level (M = diag(mask) per fine dof; ghost rows
+    empty): (M A M P) formed by the owners of the fine rows, the ghost rows sent, then each owned
+    coarse row summed over its fine rows in ascending order. A's owned rows must be complete."""
+    owned_f = fine_level.owner == fine_level.rank
+    Mm = sp.diags(mask.astype(float))
+    Z = sorted_csr(keep_rows(Mm @ A @ Mm, np.repeat(owned_f, d)) @ P)
+    Z = exchange_ghost_rows(comm, fine_level.halo, Z, owned_f, coarse_level.gid, d)
+    owned_c = np.repeat(coarse_level.owner == coarse_level.rank, d)
+    return sorted_csr(keep_rows(sorted_csr(P.T), owned_c) @ Z)
+
+
+def to_block_matrix(M: sp.csr_matrix, d: int):
+    """The core's BlockMatrix of a scalar CSR matrix with d x d blocks."""
+    from .. import _core
+    B = M.tobsr(blocksize=(d, d))
+    B.sort_indices()
+    n = M.shape[0] // d
+    cls = _core.BlockMatrix2D if d == 2 else _core.BlockMatrix3D
+    return cls(n, M.shape[1] // d, B.indptr.astype(np.int64), B.indices.astype(np.int64),
+               np.ascontiguousarray(B.data.reshape(-1, d, d)))
+
+
+def max_diagonal(comm, M: sp.csr_matrix, owned_dofs: np.ndarray) -> float:
+    """The largest diagonal entry over every rank's owned rows (the same on every rank)."""
+    diag = M.diagonal()[owned_dofs] if len(owned_dofs) else np.zeros(0)
+    local = float(diag.max()) if len(diag) else 0.0
+    return local if is_serial(comm) else comm.allreduce(local, op=op(comm, "MAX"))
+
+
+class GatheredCoarsest:
+    """The coarsest level on every rank: its owned rows gathered (global node order), factored once
+    per matrix (SuperLU: one thread, the same bits everywhere), solved redundantly. Inert dofs (a
+    zero diagonal: every fine dof below truncated) get identity rows and stay zero."""
+
+    def __init__(self, comm, level, A_owned_rows: sp.csr_matrix, d: int):
+        self.comm, self.level, self.d = comm, level, d
+        n = level.num_global_nodes
+        gid = level.gid
+        coo = A_owned_rows.tocoo()
+        rows = gid[coo.row // d] * d + coo.row % d
+        cols = gid[coo.col // d] * d + coo.col % d
+        parts = [(rows, cols, coo.data)] if is_serial(comm) else comm.allgather((rows, cols, coo.data))
+        r = np.concatenate([p[0] for p in parts])
+        c = np.concatenate([p[1] for p in parts])
+        v = np.concatenate([p[2] for p in parts])
+        order = np.lexsort((c, r))
+        self.A = sorted_csr(sp.csr_matrix((v[order], (r[order], c[order])), shape=(n * d, n * d)))
+        diag = self.A.diagonal()
+        scale = float(diag.max()) if len(diag) else 0.0
+        self.inert = diag <= 1e-12 * scale
+        keep = (~self.inert).astype(float)
+        S = sp.diags(keep) @ self.A @ sp.diags(keep) + sp.diags(self.inert.astype(float))
+        from scipy.sparse.linalg import splu
+        self.lu = splu(sp.csc_matrix(S))
+        self.scale = scale
+
+    def gather(self, x_local: np.ndarray) -> np.ndarray:
+        """The global vector (n * d) from the owned entries of every rank."""
+        lev, d = self.level, self.d
+        owned = np.flatnonzero(lev.owner == lev.rank)
+        idx, vals = lev.gid[owned], x_local[owned]
+        parts = [(idx, vals)] if is_serial(self.comm) else self.comm.allgather((idx, vals))
+        out = np.zeros((lev.num_global_nodes, d))
+        for i, v in parts:
+            out[i] = v
+        return out.ravel()
+
+    def solve(self, b_global: np.ndarray) -> np.ndarray:
+        b = np.where(self.inert, 0.0, b_global)
+        return self.lu.solve(b)

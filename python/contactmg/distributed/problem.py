@@ -1,0 +1,200 @@
+"""A contact problem solved on MPI ranks: the description of one body against a rigid obstacle on a
+DistributedHierarchy, and its solve by truncated monotone multigrid (frictionless and Tresca
+contact), the same cycle as the serial solver's on each rank's part.
+
+    comm = contactmg.distributed.get_comm()
+    h = DistributedHierarchy.build(coarse_mesh, levels, comm, projector=...)
+    problem = DistributedProblem(h, Material(E, nu), [Dirichlet(...)], contact_tags=[...],
+                                 obstacle=PlaneObstacle(...), friction=Tresca(0.1))
+    result = problem.solve(SolverOptions(cycle="V"))
+    result.write_pvtu("out/result.pvtu")
+
+Run it with `mpirun -n N python script.py`; on one process it runs without MPI. Every rank returns
+the same cycle counts, norms and status; the displacement of each node is the same on every number
+of ranks, bit for bit."""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Callable, Dict, List, Optional, Sequence
+
+import numpy as np
+
+from ..model.friction import Frictionless
+from ..model.problem import Dirichlet
+from ..solve.options import DEFAULT_OMEGA, SolverOptions, options_from
+from .comm import get_comm, is_serial, op, raise_together
+from .cycle import DistributedMonotoneStep
+from .fine_level import LocalFine, check_description
+
+# a stop on the correction norm is confirmed by one more sweep moving the iterate by at most this
+# many times the tolerance (loop_solver.hpp's kSweepCheckFactor)
+SWEEP_CHECK_FACTOR = 100.0
+DIVERGENCE_FACTOR = 1e8
+PHASES = ("pre_smooth", "linearize", "coarse_update", "coarse_correction", "post_smooth", "norm")
+
+
+@dataclass
+class DistributedOptions:
+    """The options of a distributed solve, resolved from SolverOptions."""
+
+    cycle: str
+    nu1: int
+    nu2: int
+    omega: float
+    omega_post: float
+    tol: float
+    rtol: float
+    max_cycles: int
+
+
+def resolve(options, cell_type: str) -> DistributedOptions:
+    """DistributedOptions from SolverOptions (None: the defaults); a ValueError for what is not
+    distributed yet."""
+    o = options_from(options)
+    if o.method not in (None, "nmg"):
+        raise ValueError(f"method {o.method!r} is not distributed yet: the distributed solve is truncated monotone "
+                         "multigrid (method 'nmg'); solve on one rank for the others")
+    for name in ("petrov_galerkin", "upwind_contact_sweep", "projected_coarse_correction", "local_smoothing"):
+        if getattr(o, name, None):
+            raise ValueError(f"{name} is not distributed yet: solve on one rank")
+    if o.lines:
+        raise ValueError("line smoothers are not distributed yet: solve on one rank")
+    omega = float(o.omega) if o.omega is not None else float(DEFAULT_OMEGA.get(cell_type, 1.0))
+    post = float(o.omega_post) if o.omega_post is not None else omega
+    tol, rtol = o.stop
+    return DistributedOptions(o.cycle, o.nu1, o.nu2, omega, post, tol, rtol, o.max_cycles)
+
+
+@dataclass
+class DistributedResult:
+    """The solve on this rank: `u` (local nodes, (n, d), global x/y(/z) components), the global
+    facts (converged, status, cycles, history: one dict per cycle), the seconds of the solve and of
+    each phase on this rank, `ranks`, and the hierarchy the local nodes belong to."""
+
+    u: np.ndarray
+    converged: bool
+    status: str
+    cycles: int
+    history: List[dict]
+    seconds: float
+    build_seconds: float
+    phase_seconds: Dict[str, float]
+    ranks: int
+    memory_bytes: int
+    hierarchy: object = field(repr=False)
+    notes: List[str] = field(default_factory=list)
+
+    @property
+    def level(self):
+        return self.hierarchy.levels[-1]
+
+    def gathered_u(self, root: int = 0) -> Optional[np.ndarray]:
+        """The displacement of every node (global node order, the serial hierarchy's) on `root`;
+        None on the other ranks. Collective."""
+        lev, comm = self.level, self.hierarchy.comm
+        owned = np.flatnonzero(lev.owner == lev.rank)
+        mine = (lev.gid[owned], self.u[owned])
+        parts = [mine] if is_serial(comm) else comm.gather(mine, root=root)
+        if comm.rank != root:
+            return None
+        out = np.zeros((lev.num_global_nodes, self.u.shape[1]))
+        for g, v in parts:
+            out[g] = v
+        return out
+
+    def write_pvtu(self, path) -> None:
+        """The displacement as a parallel .pvtu: one piece per rank (collective)."""
+        from .output import write_pvtu
+        write_pvtu(path, self.level, {"displacement": self.u}, comm=self.hierarchy.comm)
+
+    def write_vtu(self, path, root: int = 0) -> None:
+        """The displacement gathered into one .vtu on `root`, in global node order (collective)."""
+        from .output import write_gathered_vtu
+        write_gathered_vtu(path, self.level, {"displacement": self.u}, comm=self.hierarchy.comm, root=root)
+
+
+class DistributedProblem:
+    """Linear elasticity of one body on a DistributedHierarchy with contact on its `contact_tags`
+    facets against the rigid `obstacle`: Frictionless() (the default) or Tresca(bound); loads: body
+    force, gravity, tractions and pressures as in Body. Collective: every rank builds its part."""
+
+    def __init__(self, hierarchy, material, dirichlet: Sequence[Dirichlet] = (), contact_tags: Sequence[int] = (),
+                 obstacle=None, friction=None, body_force=None, traction=None, pressure=None, gravity=None,
+                 point_loads=(), springs=None):
+        t0 = time.perf_counter()
+        self.hierarchy = hierarchy
+        comm = self.comm = hierarchy.comm
+        friction = Frictionless() if friction is None else friction
+        self.friction = friction
+        dirichlet = [dirichlet] if isinstance(dirichlet, Dirichlet) else list(dirichlet)
+        with raise_together(comm):
+            check_description(material, friction, point_loads, springs)
+            if len(hierarchy.levels) < 2:
+                raise ValueError("a distributed solve needs at least two levels")
+            if len(contact_tags) and obstacle is None:
+                raise ValueError("contact tags need an obstacle")
+            self.fine = LocalFine(hierarchy.levels[-1], hierarchy.cell_type, material, dirichlet, contact_tags, obstacle,
+                                  friction, body_force, traction, pressure, gravity)
+        found = self.fine.found_dirichlet.astype(int)
+        contacts = len(self.fine.owned_contacts)
+        if not is_serial(comm):
+            found = comm.allreduce(found, op=op(comm, "MAX"))
+            contacts = comm.allreduce(contacts, op=op(comm, "SUM"))
+        with raise_together(comm):
+            for bc, f in zip(dirichlet, np.atleast_1d(found)):
+                if not f:
+                    raise ValueError(f"no boundary facet carries the Dirichlet tags {list(bc.tags)}")
+            if len(contact_tags) and contacts == 0:
+                raise ValueError(f"no boundary facet carries the contact tags {list(contact_tags)}")
+        self.num_contact = int(contacts)
+        self.assembly_seconds = time.perf_counter() - t0
+
+    @property
+    def law(self) -> str:
+        return self.fine.law
+
+    def solve(self, options=None, progress: Optional[Callable[[dict], None]] = None) -> DistributedResult:
+        """Truncated monotone multigrid from u = 0 until ||u^{k+1} - u^k||_A meets the stop of
+        `options` (SolverOptions: tol / rtol, cycle, nu1, nu2, omega, max_cycles), confirmed by one
+        more sweep. `progress(record)` is called on rank 0 after each cycle. Collective."""
+        comm = self.comm
+        with raise_together(comm):
+            opt = resolve(options, self.hierarchy.cell_type)
+        t0 = time.perf_counter()
+        step = DistributedMonotoneStep(comm, self.fine, self.hierarchy, opt)
+        build = time.perf_counter() - t0
+        d, n = self.fine.d, len(self.fine.level.gid)
+        u = np.zeros((n, d))
+        history: List[dict] = []
+        first = -1.0
+        status, converged = f"no convergence in {opt.max_cycles} cycles", False
+        t1 = time.perf_counter()
+        for it in range(1, opt.max_cycles + 1):
+            cn = step.iterate(u)
+            rec = step.record(u)
+            rec.update(cycle=it, correction_norm=cn, seconds=time.perf_counter() - t1)
+            history.append(rec)
+            if progress is not None and comm.rank == 0:
+                progress(dict(rec))
+            if first < 0:
+                first = cn
+            scale = max(first, rec["solution_norm"])
+            if not np.isfinite(cn) or (first > 0 and cn > DIVERGENCE_FACTOR * first):
+                status = (f"diverged: correction norm {cn:.3g} at cycle {it}" if np.isfinite(cn)
+                          else f"diverged: the iterate is no longer finite at cycle {it}")
+                break
+            if cn <= opt.tol or cn <= opt.rtol * scale:
+                sc = step.sweep_change(u)
+                allowed = SWEEP_CHECK_FACTOR * max(opt.tol, opt.rtol * scale)
+                if sc > allowed:
+                    status = (f"stalled: the cycle returns to an iterate (correction {cn:.3g}) that one more "
+                              f"smoothing sweep still moves by {sc:.3g} (energy norm)")
+                    break
+                status, converged = "converged", True
+                break
+        seconds = time.perf_counter() - t1
+        u_canonical = self.fine.core.to_canonical(u)
+        return DistributedResult(u_canonical, converged, status, len(history), history, seconds, build,
+                                 dict(step.phase_seconds), comm.size, step.memory_bytes(), self.hierarchy,
+                                 step.notes)
