@@ -9,6 +9,9 @@ which ends every rank (get_comm sets abort_on_uncaught on several ranks).
 MODE "error": rank 1 fails a guarded input check; every rank prints the error it gets.
 MODE "uncaught": rank 1 raises outside any guard while the others wait in a barrier: the hook that
 get_comm sets must end them.
+MODE "solve" (`mpi_checks.py solve FOLDER N`): the distributed solves of solve_checks.CASES, rank 0
+saving each (displacement, cycles, norms, energies) as FOLDER/<case>.npz; the test compares them.
+MODE "coulomb": a Coulomb problem, not distributed yet: every rank prints the error it gets.
 MODE "output" (`mpi_checks.py output FOLDER N`): the finest level of a triangle and a tetrahedron
 hierarchy written as .pvtu and gathered .vtu into FOLDER (output_checks.write_fields); the test
 process checks the files."""
@@ -26,6 +29,7 @@ from contactmg.mesh.generators import hertz_half_disk, hertz_projector
 from contactmg.mesh.generators_3d import ball_projector, box, half_ball
 from contactmg.mesh.hierarchy import MeshHierarchy
 from output_checks import MESHES as OUTPUT_MESHES, write_fields
+from solve_checks import CASES as SOLVE_CASES, solve_case
 
 LEVELS = 3
 # (coarse mesh, boundary projector): the half disks' new nodes on the arc are projected onto it
@@ -178,6 +182,29 @@ def main(mode, ranks, *args):
             with raise_together(comm):
                 if comm.rank == min(1, comm.size - 1):
                     raise ValueError("bad input on this rank: levels must be positive, got -1")
+        except DistributedError as e:
+            print(f"rank {comm.rank} stops: {e}", flush=True)
+            sys.exit(3)
+        return
+    if mode == "solve":
+        for name in SOLVE_CASES:
+            got = solve_case(name, comm)
+            if comm.rank == 0:
+                np.savez(f"{args[0]}/{name}.npz", **got)
+            rank0_print(f"OK solve {name}", comm=comm)
+        return
+    if mode == "coulomb":
+        from contactmg.distributed import DistributedProblem
+        from contactmg.mesh.generators import HERTZ_ARC, HERTZ_TOP
+        from contactmg.model.friction import Coulomb
+        from contactmg.model.material import Material
+        from contactmg.model.obstacle import PlaneObstacle
+        from contactmg.model.problem import Dirichlet
+        h = DistributedHierarchy.build(hertz_half_disk("triangle"), 2, comm=comm)
+        try:
+            DistributedProblem(h, Material(2000.0, 0.28), [Dirichlet([HERTZ_TOP], (0.0, -0.005))],
+                               contact_tags=[HERTZ_ARC], obstacle=PlaneObstacle((0.0, 0.0), (0.0, -1.0)),
+                               friction=Coulomb(0.4))
         except DistributedError as e:
             print(f"rank {comm.rank} stops: {e}", flush=True)
             sys.exit(3)
