@@ -84,16 +84,18 @@ class LocalFine:
         # (a bound given per node names global node ids)
         coef = friction.coefficients(level.gid[contact.nodes], contact.measure) if len(contact.nodes) else np.zeros(0)
         # per node: is it a contact node, gap, normal, coefficient -- the owner's
-        table = np.zeros((n, 3 + d))
+        table = np.zeros((n, 4 + d))
         table[contact.nodes, 0] = 1.0
         table[contact.nodes, 1] = contact.gaps
         table[contact.nodes, 2] = coef
-        table[contact.nodes, 3:] = contact.normals
+        table[contact.nodes, 3] = contact.measure
+        table[contact.nodes, 4:] = contact.normals
         table = _owners_values(level, table)
         self.contact_nodes = np.flatnonzero(table[:, 0] > 0.5).astype(np.int64)
         self.gaps = np.ascontiguousarray(table[self.contact_nodes, 1])
         self.coefficients = np.ascontiguousarray(table[self.contact_nodes, 2])
-        self.normals = np.ascontiguousarray(table[self.contact_nodes, 3:])
+        self.measure = np.ascontiguousarray(table[self.contact_nodes, 3])
+        self.normals = np.ascontiguousarray(table[self.contact_nodes, 4:])
         cls = _core.LocalContactLevel2D if d == 2 else _core.LocalContactLevel3D
         self.core = cls(A, self.canonical_load, self.fixed.astype(np.uint8), self.fixed_values, self.contact_nodes,
                         self.normals, self.gaps, self.coefficients, self.law)

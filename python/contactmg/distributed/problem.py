@@ -84,6 +84,16 @@ class DistributedResult:
     memory_bytes: int
     hierarchy: object = field(repr=False)
     notes: List[str] = field(default_factory=list)
+    # the contact zone: the total force of the obstacle on the body (global components), the nodes
+    # touching (stick, slip), the largest |x| of a touching (sticking) node, the largest normal
+    # stress (contact force over the lumped boundary measure)
+    reaction: np.ndarray = None
+    contact_nodes: int = 0
+    stick_nodes: int = 0
+    slip_nodes: int = 0
+    contact_halfwidth: float = 0.0
+    stick_halfwidth: float = 0.0
+    max_normal_stress: float = 0.0
 
     @property
     def level(self):
@@ -195,6 +205,31 @@ class DistributedProblem:
                 break
         seconds = time.perf_counter() - t1
         u_canonical = self.fine.core.to_canonical(u)
-        return DistributedResult(u_canonical, converged, status, len(history), history, seconds, build,
-                                 dict(step.phase_seconds), comm.size, step.memory_bytes(), self.hierarchy,
-                                 step.notes)
+        out = DistributedResult(u_canonical, converged, status, len(history), history, seconds, build,
+                                dict(step.phase_seconds), comm.size, step.memory_bytes(), self.hierarchy, step.notes)
+        self._contact_zone(u, out)
+        return out
+
+    def _contact_zone(self, u: np.ndarray, out: DistributedResult) -> None:
+        """The contact facts of `out` from this rank's owned contact nodes, summed or maximized
+        over the ranks (sums exact)."""
+        from .exchange import exact_sum
+        fine, comm, d = self.fine, self.comm, self.fine.d
+        mine = fine.owned_contacts
+        nodes = fine.contact_nodes[mine]
+        r = fine.core.residual(u, nodes.astype(np.int64))[nodes]          # f - A u in the frames
+        force_frame = -r                                                   # A u - f: the obstacle's force
+        force = np.einsum("cab,cb->ca", fine.frames[mine], force_frame)   # global components
+        out.reaction = np.array([exact_sum(force[:, a], comm) for a in range(d)])
+        state, _ = fine.core.contact_state(u, np.zeros_like(u), mine.astype(np.int64))
+        x = fine.level.points[nodes, 0]
+        touching, stick = state > 0, state == 1
+        stress = np.abs(force_frame[:, 0]) / np.where(fine.measure[mine] > 0, fine.measure[mine], np.inf)
+        local = np.array([np.abs(x[touching]).max(initial=0.0), np.abs(x[stick]).max(initial=0.0),
+                          stress[touching].max(initial=0.0)])
+        counts = np.array([np.count_nonzero(touching), np.count_nonzero(stick), np.count_nonzero(state == 2)])
+        if not is_serial(comm):
+            local = comm.allreduce(local, op=op(comm, "MAX"))
+            counts = comm.allreduce(counts, op=op(comm, "SUM"))
+        out.contact_halfwidth, out.stick_halfwidth, out.max_normal_stress = (float(v) for v in local)
+        out.contact_nodes, out.stick_nodes, out.slip_nodes = (int(v) for v in counts)
