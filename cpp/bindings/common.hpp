@@ -101,5 +101,6 @@ inline py::dict history_to_dict(const std::vector<CycleRecord>& H) {
 void bind_fem(py::module_& m);
 void bind_solver(py::module_& m);
 void bind_testing(py::module_& m);
+void bind_distributed(py::module_& m);
 
 }  // namespace cmg::bindings
