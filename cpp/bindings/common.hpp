@@ -102,5 +102,6 @@ void bind_fem(py::module_& m);
 void bind_solver(py::module_& m);
 void bind_local_levels(py::module_& m);
 void bind_testing(py::module_& m);
+void bind_distributed(py::module_& m);
 
 }  // namespace cmg::bindings

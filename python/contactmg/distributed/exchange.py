@@ -5,7 +5,8 @@ A floating-point sum rounds after every addition, so its value depends on the or
 per-rank partial sums changes with the partition. exact_sum and exact_dot instead add every term
 exactly, as integers (each double is m * 2^e with an integer m of at most 53 bits), combine the
 ranks' integers exactly and round once at the end: the correctly rounded sum, the same on every
-rank count and equal to math.fsum of all the terms in one place."""
+rank count and equal to math.fsum of all the terms in one place. The local sums run in the compiled
+core (cpp/base/exact_sum.hpp); the numpy versions here are the tests' reference."""
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -13,6 +14,7 @@ from typing import Dict, List
 
 import numpy as np
 
+from .. import _core
 from .comm import get_comm, is_serial, mpi_module
 
 # x = m * 2^e with |m| < 2^53 integer: e of the smallest subnormal, 2^-1074 = 2^-1 * 2^-1073 (frexp),
@@ -63,15 +65,28 @@ def _round(total: int) -> float:
 
 
 def local_fixed_point_sum(x) -> int:
-    """This rank's terms summed exactly (the integer of _fixed_point)."""
+    """This rank's terms summed exactly: the integer T with sum = T * 2^_E_MIN, from the compiled
+    core's long accumulator."""
+    return _core.exact_sum_limbs(np.ascontiguousarray(x, dtype=float).ravel())
+
+
+def local_fixed_point_dot(x, y) -> int:
+    """sum(x * y) exactly, every product exact: the integer T with sum = T * 2^_E_MIN, from the
+    compiled core's long accumulator."""
+    return _core.exact_dot_limbs(np.ascontiguousarray(x, dtype=float).ravel(),
+                                 np.ascontiguousarray(y, dtype=float).ravel())
+
+
+def _numpy_fixed_point_sum(x) -> int:
+    """local_fixed_point_sum in numpy: the reference the core's integer is tested against."""
     x = np.ascontiguousarray(x, dtype=float).ravel()
     _check_finite(x, "the array")
     return _fixed_point(*_mantissas(x))
 
 
-def local_fixed_point_dot(x, y) -> int:
-    """sum(x * y) exactly: each product split into four partial products of half mantissas (26 and
-    27 bits), each exact in int64."""
+def _numpy_fixed_point_dot(x, y) -> int:
+    """local_fixed_point_dot in numpy, the reference of the tests: each product split into four
+    partial products of half mantissas (26 and 27 bits), each exact in int64."""
     x = np.ascontiguousarray(x, dtype=float).ravel()
     y = np.ascontiguousarray(y, dtype=float).ravel()
     if x.shape != y.shape:

@@ -1,0 +1,50 @@
+// The local halves of the distributed exact sums: this rank's terms summed exactly, as the Python
+// integer T with sum = T * 2^kExpMin that contactmg.distributed.exchange combines over the ranks.
+#include "base/exact_sum.hpp"
+#include "bindings/common.hpp"
+
+namespace cmg::bindings {
+
+namespace {
+
+std::string shape_of(const DArr& a) {
+  std::string s = "(";
+  for (py::ssize_t k = 0; k < a.ndim(); ++k) s += std::to_string(a.shape(k)) + (k + 1 < a.ndim() ? ", " : "");
+  return s + (a.ndim() == 1 ? ",)" : ")");
+}
+
+py::int_ to_int(ExactAccumulator& acc) {
+  const std::vector<unsigned char> b = acc.to_bytes();
+  const py::object from_bytes = py::reinterpret_borrow<py::object>((PyObject*)&PyLong_Type).attr("from_bytes");
+  return from_bytes(py::bytes(reinterpret_cast<const char*>(b.data()), b.size()), "little", py::arg("signed") = true);
+}
+
+}  // namespace
+
+void bind_distributed(py::module_& m) {
+  m.def("exact_sum_limbs", [](DArr x) {
+           ExactAccumulator acc;
+           {
+             py::gil_scoped_release release;
+             acc = exact_sum(x.data(), (std::int64_t)x.size(), "the array");
+           }
+           return to_int(acc);
+         }, py::arg("x"),
+         "The sum of all entries of x (any shape) exactly, as the integer T with sum = T * 2^-2252 (the "
+         "local_fixed_point_sum of contactmg.distributed.exchange). ValueError for a non-finite entry.");
+  m.def("exact_dot_limbs", [](DArr x, DArr y) {
+           if (x.ndim() != y.ndim() || !std::equal(x.shape(), x.shape() + x.ndim(), y.shape()))
+             throw InputError("exact_dot needs arrays of one length (one shape), got " + shape_of(x) + " and " + shape_of(y));
+           ExactAccumulator acc;
+           {
+             py::gil_scoped_release release;
+             acc = exact_dot(x.data(), y.data(), (std::int64_t)x.size(), "the first array", "the second array");
+           }
+           return to_int(acc);
+         }, py::arg("x"), py::arg("y"),
+         "sum(x * y) over all entries (x and y of one shape) exactly, each product exact, as the integer T with "
+         "sum = T * 2^-2252 (the local_fixed_point_dot of contactmg.distributed.exchange). ValueError for a "
+         "non-finite entry or different shapes.");
+}
+
+}  // namespace cmg::bindings
