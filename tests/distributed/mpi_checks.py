@@ -11,6 +11,8 @@ MODE "uncaught": rank 1 raises outside any guard while the others wait in a barr
 get_comm sets must end them.
 MODE "solve" (`mpi_checks.py solve FOLDER N`): the distributed solves of solve_checks.CASES, rank 0
 saving each (displacement, cycles, norms, energies) as FOLDER/<case>.npz; the test compares them.
+MODE "cli" (`mpi_checks.py cli FOLDER N`): `contactmg hertz` and `contactmg sphere` on the ranks
+(JSON and VTU into FOLDER) and a Coulomb hertz run; rank 0 prints each exit status.
 MODE "coulomb": a Coulomb problem, not distributed yet: every rank prints the error it gets.
 MODE "output" (`mpi_checks.py output FOLDER N`): the finest level of a triangle and a tetrahedron
 hierarchy written as .pvtu and gathered .vtu into FOLDER (output_checks.write_fields); the test
@@ -192,6 +194,18 @@ def main(mode, ranks, *args):
             if comm.rank == 0:
                 np.savez(f"{args[0]}/{name}.npz", **got)
             rank0_print(f"OK solve {name}", comm=comm)
+        return
+    if mode == "cli":  # mpi_checks.py cli FOLDER N: the commands on the ranks, their exit statuses
+        from contactmg.cli.main import main as cli_main
+        folder = args[0]
+        runs = {"hertz": ["hertz", "--levels", "4", "--friction", "0", "--json", f"{folder}/hertz.json",
+                          "--vtu", f"{folder}/hertz.vtu", "-q"],
+                "sphere": ["sphere", "--levels", "2", "--cell", "tetra", "--friction", "0", "--json",
+                           f"{folder}/sphere.json", "-q"],
+                "coulomb": ["hertz", "--levels", "3", "--friction", "0.4", "-q"]}
+        for name, argv in runs.items():
+            status = cli_main(argv)
+            rank0_print(f"EXIT {name} {status}", comm=comm)
         return
     if mode == "coulomb":
         from contactmg.distributed import DistributedProblem

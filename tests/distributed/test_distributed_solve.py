@@ -87,3 +87,38 @@ def test_coulomb_is_refused_on_every_rank():
     for rank in range(2):
         assert f"rank {rank} stops: rank 0: ValueError: Coulomb friction is not distributed yet" in r.stdout, \
             r.stdout + r.stderr
+
+
+@pytest.mark.skipif(bool(missing()), reason=missing() or "MPI available")
+def test_commands_on_two_ranks_report_the_serial_keys(tmp_path):
+    import json
+    import meshio
+    from contactmg.cli.main import main as cli_main
+    r = run_ranks(2, "cli", str(tmp_path), timeout=180)
+    assert r.returncode == 0, r.stdout + r.stderr
+    lines = r.stdout.splitlines()
+    assert "EXIT hertz 0" in lines and "EXIT sphere 0" in lines, r.stdout
+    # Coulomb is not distributed yet: exit status 2 and one line from rank 0 alone
+    assert "EXIT coulomb 2" in lines, r.stdout
+    errors = [ln for ln in r.stderr.splitlines() if ln.startswith("contactmg hertz: error:")]
+    assert errors == ["contactmg hertz: error: Coulomb friction is not distributed yet: run with --friction 0 "
+                      "(frictionless) or on one rank"], r.stderr
+    for name, argv in (("hertz", ["hertz", "--levels", "4", "--friction", "0"]),
+                       ("sphere", ["sphere", "--levels", "2", "--cell", "tetra", "--friction", "0"])):
+        serial_json = tmp_path / f"{name}-serial.json"
+        assert cli_main(argv + ["--json", str(serial_json), "-q"]) == 0
+        serial, dist = json.loads(serial_json.read_text()), json.loads((tmp_path / f"{name}.json").read_text())
+        assert set(serial) <= set(dist), set(serial) - set(dist)
+        assert dist["ranks"] == 2 and serial["ranks"] == 1
+        assert len(dist["rank_solve_seconds"]) == 2 and len(dist["rank_memory_bytes"]) == 2
+        assert dist["converged"] and abs(dist["cycles"] - serial["cycles"]) <= 1
+        assert dist["dofs"] == serial["dofs"] and dist["contact_nodes"] == serial["contact_nodes"]
+        assert np.allclose(dist["reaction"], serial["reaction"], rtol=1e-9, atol=1e-9 * abs(serial["reaction"][-1]))
+        assert dist["contact_halfwidth"] == pytest.approx(serial["contact_halfwidth"], rel=1e-12)
+        assert dist["max_normal_stress"] == pytest.approx(serial["max_normal_stress"], rel=1e-8)
+        if name == "sphere":
+            assert dist["central_pressure"] == pytest.approx(serial["central_pressure"], rel=1e-8)
+    # the gathered .vtu: the serial mesh's points, the displacement in global components
+    m = meshio.read(tmp_path / "hertz.vtu")
+    assert m.point_data["displacement"].shape[0] == json.loads((tmp_path / "hertz.json").read_text())["nodes"]
+    assert m.point_data["displacement"][:, 1].min() < 0

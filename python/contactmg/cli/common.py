@@ -220,7 +220,7 @@ def hertz_report(args, problem, result) -> dict:
         "hertz_peak_pressure": hertz.peak_pressure(load) if load > 0 else None,
         "peak_rss_mb": peak_rss_mb(),
         "threads": result.extra.get("threads"), "ordering": result.extra.get("ordering"),
-        "hierarchy": problem.hierarchy.kind,
+        "hierarchy": problem.hierarchy.kind, "ranks": 1,
     }
     if args.method == "tnnmg" and "linear_iterations" in result.history:  # its linear correction
         out["linear_correction"] = getattr(args, "linear", None) or "pcg"

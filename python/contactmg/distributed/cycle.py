@@ -261,6 +261,7 @@ class DistributedMonotoneStep:
         self.phase_seconds = {k: 0.0 for k in ("pre_smooth", "linearize", "coarse_update", "coarse_correction",
                                                "post_smooth", "norm")}
         self.notes = []
+        self.rebuilds = 0  # coarse hierarchies built (the first included)
         if fine.frames.size and not np.all(np.isin(np.round(np.abs(fine.frames), 15), (0.0, 1.0))):
             self.notes.append("rotated contact frames: the plain truncated coarse correction (the serial solver "
                               "projects it there)")
@@ -334,6 +335,7 @@ class DistributedMonotoneStep:
         if _any(self.comm, changed):
             self.coarse.build(self.fine, self.fine_matrix_with(hess_nodes, hess), mask)
             self.built = key
+            self.rebuilds += 1
         lap("coarse_update")
         w = self.coarse.correction(opt, r, mask, lo, hi, bounded)
         u += w.reshape(-1, self.d)
@@ -358,7 +360,7 @@ class DistributedMonotoneStep:
         e += exact_sum(fe, self.comm)
         counts = np.array([np.count_nonzero(state > 0), np.count_nonzero(state == 1), np.count_nonzero(state == 2)])
         if not is_serial(self.comm):
-            counts = self.comm.allreduce(counts, op=op(self.comm, "SUM"))
+            counts = np.sum(self.comm.allgather(counts), axis=0)
         norm = float(np.sqrt(max(exact_dot(uf[o], Au[o], self.comm), 0.0)))
         return {"energy": e, "solution_norm": norm, "active": int(counts[0]), "stick": int(counts[1]),
                 "slip": int(counts[2])}

@@ -85,8 +85,9 @@ class DistributedResult:
     hierarchy: object = field(repr=False)
     notes: List[str] = field(default_factory=list)
     # the contact zone: the total force of the obstacle on the body (global components), the nodes
-    # touching (stick, slip), the largest |x| of a touching (sticking) node, the largest normal
-    # stress (contact force over the lumped boundary measure)
+    # touching (stick, slip), the largest distance of a touching (sticking) node from the line x = 0
+    # (2D) or the z axis (3D), the largest normal stress (contact force over the lumped boundary
+    # measure); the coarse hierarchies built
     reaction: np.ndarray = None
     contact_nodes: int = 0
     stick_nodes: int = 0
@@ -94,6 +95,8 @@ class DistributedResult:
     contact_halfwidth: float = 0.0
     stick_halfwidth: float = 0.0
     max_normal_stress: float = 0.0
+    central_pressure: float = 0.0
+    rebuilds: int = 0
 
     @property
     def level(self):
@@ -149,7 +152,7 @@ class DistributedProblem:
         found = self.fine.found_dirichlet.astype(int)
         contacts = len(self.fine.owned_contacts)
         if not is_serial(comm):
-            found = comm.allreduce(found, op=op(comm, "MAX"))
+            found = np.max(comm.allgather(np.atleast_1d(found)), axis=0)
             contacts = comm.allreduce(contacts, op=op(comm, "SUM"))
         with raise_together(comm):
             for bc, f in zip(dirichlet, np.atleast_1d(found)):
@@ -207,6 +210,7 @@ class DistributedProblem:
         u_canonical = self.fine.core.to_canonical(u)
         out = DistributedResult(u_canonical, converged, status, len(history), history, seconds, build,
                                 dict(step.phase_seconds), comm.size, step.memory_bytes(), self.hierarchy, step.notes)
+        out.rebuilds = step.rebuilds
         self._contact_zone(u, out)
         return out
 
@@ -222,14 +226,21 @@ class DistributedProblem:
         force = np.einsum("cab,cb->ca", fine.frames[mine], force_frame)   # global components
         out.reaction = np.array([exact_sum(force[:, a], comm) for a in range(d)])
         state, _ = fine.core.contact_state(u, np.zeros_like(u), mine.astype(np.int64))
-        x = fine.level.points[nodes, 0]
+        # distance from the x = 0 line (2D) or the z axis (3D): the examples' symmetry axes
+        pts = fine.level.points[nodes]
+        x = pts[:, 0] if d == 2 else np.hypot(pts[:, 0], pts[:, 1])
         touching, stick = state > 0, state == 1
         stress = np.abs(force_frame[:, 0]) / np.where(fine.measure[mine] > 0, fine.measure[mine], np.inf)
         local = np.array([np.abs(x[touching]).max(initial=0.0), np.abs(x[stick]).max(initial=0.0),
                           stress[touching].max(initial=0.0)])
         counts = np.array([np.count_nonzero(touching), np.count_nonzero(stick), np.count_nonzero(state == 2)])
         if not is_serial(comm):
-            local = comm.allreduce(local, op=op(comm, "MAX"))
-            counts = comm.allreduce(counts, op=op(comm, "SUM"))
+            local = np.max(comm.allgather(local), axis=0)
+            counts = np.sum(comm.allgather(counts), axis=0)
         out.contact_halfwidth, out.stick_halfwidth, out.max_normal_stress = (float(v) for v in local)
+        # the normal stress at the contact node nearest the axis (lowest global id among equals)
+        k = int(np.argmin(x)) if len(x) else -1
+        mine_c = (float(x[k]), int(fine.level.gid[nodes[k]]), float(stress[k])) if k >= 0 else (np.inf, -1, 0.0)
+        every = [mine_c] if is_serial(comm) else comm.allgather(mine_c)
+        out.central_pressure = min(every)[2]
         out.contact_nodes, out.stick_nodes, out.slip_nodes = (int(v) for v in counts)
