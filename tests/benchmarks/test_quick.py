@@ -153,6 +153,19 @@ def check_exact_sums(res):
     assert all(r["speedup"] > 3 for r in rows if r["n"] == 100_000)
 
 
+def check_mpi_scaling(res):
+    rows = res["rows"]
+    strong = [r for r in rows if r["kind"] == "strong"]
+    assert [r["ranks"] for r in strong] == [1, 2]
+    # the same displacement bit for bit and the same cycles on every rank count, converged
+    assert all(r["bitwise_as_one_rank"] for r in strong)
+    assert len({r["cycles"] for r in strong}) == 1
+    # the serial solver's cycles within one (another colour order)
+    assert all(abs(r["threads_cycles"] - r["cycles"]) <= 1 for r in strong)
+    assert all(0 < r["bytes_per_owned_dof"] < 5000 for r in rows)
+    assert res["bandwidth"]["read_gb_s_1"] > 0
+
+
 def check_memory(res):
     for r in res["rows"]:
         assert r["converged"]
@@ -231,13 +244,14 @@ CHECKS = {"paper/table1": check_table1, "paper/hertz_stresses": check_hertz_stre
           "methods/load_path": check_load_path, "performance/cycle_time": check_cycle_time,
           "performance/threads": check_threads, "performance/memory": check_memory,
           "performance/skip_work": check_skip_work,
-          "performance/exact_sums": check_exact_sums, "model/engineering_models": check_engineering_models,
+          "performance/exact_sums": check_exact_sums,
+          "performance/mpi_scaling": check_mpi_scaling, "model/engineering_models": check_engineering_models,
           "model/cad_refinement": check_cad_refinement, "model/one_mesh": check_one_mesh}
 
 
 def test_every_script_is_checked_and_documented():
     assert set(SCRIPTS) == set(CHECKS)
-    assert len(SCRIPTS) + 1 <= 21  # with run_all.py
+    assert len(SCRIPTS) + 1 <= 22  # with run_all.py
     for name in SCRIPTS + ["run_all", "_common"]:
         doc = ast.get_docstring(ast.parse((BENCHMARKS / f"{name}.py").read_text()))
         assert doc and "python benchmarks/" in doc or name == "_common", name

@@ -4,7 +4,7 @@ serial solver: small Hertz half disks and Hertz spheres, frictionless and Tresca
 count, the correction norms and energies of every cycle."""
 import numpy as np
 
-from contactmg.distributed.examples import hertz, sphere
+from contactmg.examples.distributed import hertz, sphere
 from contactmg.solve.options import SolverOptions
 
 # name: (example, levels, cell, Tresca bound (0: frictionless), partition: None (METIS) or "scattered")

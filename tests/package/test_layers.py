@@ -6,7 +6,7 @@ from pathlib import Path
 import pytest
 
 PKG = Path(__file__).resolve().parents[2] / "python" / "contactmg"
-LAYERS = ["mesh", "distributed", "model", "results", "solve", "examples", "cli"]
+LAYERS = ["mesh", "model", "results", "solve", "distributed", "examples", "cli"]
 
 
 def modules():

@@ -42,7 +42,7 @@ def run(args) -> int:
     """The command on the ranks of COMM_WORLD; returns the exit status (the same on every rank)."""
     from ..distributed import DistributedError, get_comm
     from ..distributed.comm import op
-    from ..distributed.examples import hertz, sphere
+    from ..examples.distributed import hertz, sphere
     from ..solve.options import SolverOptions
 
     comm = get_comm()

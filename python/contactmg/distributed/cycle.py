@@ -95,6 +95,7 @@ class CoarseLevel:
         self.smoother = None
 
     def set_matrix(self, A: sp.csr_matrix) -> None:
+        """The level's Galerkin rows (owned rows; ghost rows empty) and their smoother."""
         self.A = A
         scale = max_diagonal(self.comm, A, self.owned_dofs)
         cls = _core.LocalLevelSmoother2D if self.d == 2 else _core.LocalLevelSmoother3D
@@ -109,11 +110,13 @@ class CoarseLevel:
             self.lo, self.hi = np.ascontiguousarray(both[:, :self.d]), np.ascontiguousarray(both[:, self.d:])
 
     def set_bounded(self, bounded: bool) -> None:
+        """Which rows have a finite bound, and whether any row on any rank has one."""
         b = bounded & (np.isfinite(self.lo).any(axis=1) | np.isfinite(self.hi).any(axis=1))
         self.bounded = b.astype(np.uint8)
         self.any_bounds = _any(self.comm, bounded and bool(b[self.owned].any()))
 
     def sweep(self, forward: bool, omega: float) -> None:
+        """One (projected) Gauss-Seidel pass, colour by colour, the ghosts exchanged after each."""
         order = self.colours if forward else self.colours[::-1]
         for rows in order:
             if self.any_bounds:
@@ -276,6 +279,7 @@ class DistributedMonotoneStep:
         return int(total)
 
     def sweep(self, u: np.ndarray, forward: bool, omega: float) -> None:
+        """One nonlinear Gauss-Seidel pass over the fine level, colour by colour, u (n, d) in place."""
         order = self.colours if forward else self.colours[::-1]
         for rows in order:
             self.fine.core.sweep(u, rows, forward, omega)
@@ -305,6 +309,7 @@ class DistributedMonotoneStep:
         return mask, lo, hi, hess_nodes, hess[keep], _any(self.comm, bounded), r
 
     def fine_matrix_with(self, hess_nodes: np.ndarray, hess: np.ndarray) -> sp.csr_matrix:
+        """The fine matrix with the friction Hessian blocks added at their nodes."""
         if not len(hess_nodes):
             return self.A
         n, d = self.n, self.d
@@ -314,6 +319,7 @@ class DistributedMonotoneStep:
         return sorted_csr(self.A + H)
 
     def iterate(self, u: np.ndarray) -> float:
+        """One cycle on u (n, d, in place); returns ||u_new - u_old||_A."""
         opt, ph = self.opt, self.phase_seconds
         t = time.perf_counter()
 

@@ -167,5 +167,6 @@ class GatheredCoarsest:
         return out.ravel()
 
     def solve(self, b_global: np.ndarray) -> np.ndarray:
+        """The exact solution for the global right-hand side (inert dofs zero)."""
         b = np.where(self.inert, 0.0, b_global)
         return self.lu.solve(b)

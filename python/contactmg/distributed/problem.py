@@ -100,6 +100,7 @@ class DistributedResult:
 
     @property
     def level(self):
+        """The finest level of the hierarchy: the local nodes of `u`."""
         return self.hierarchy.levels[-1]
 
     def gathered_u(self, root: int = 0) -> Optional[np.ndarray]:
@@ -165,6 +166,7 @@ class DistributedProblem:
 
     @property
     def law(self) -> str:
+        """The contact law solved: \"linear\" without contact tags, else the friction's."""
         return self.fine.law
 
     def solve(self, options=None, progress: Optional[Callable[[dict], None]] = None) -> DistributedResult:

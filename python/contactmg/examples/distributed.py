@@ -4,17 +4,17 @@ solutions are those of the serial examples' uniform hierarchies, node for node).
 friction 0, else Tresca with the given bound (Coulomb is not distributed yet)."""
 from __future__ import annotations
 
-from ..examples import hertz as _hertz
-from ..examples import sphere as _sphere
+from . import hertz as _hertz
+from . import sphere as _sphere
 from ..mesh.generators import HERTZ_ARC, HERTZ_TOP, hertz_half_disk, hertz_projector
 from ..mesh.generators_3d import BALL_SURFACE, BALL_TOP, ball_projector, half_ball
 from ..model.friction import Frictionless, Tresca
 from ..model.material import Material
 from ..model.obstacle import PlaneObstacle
 from ..model.problem import Dirichlet
-from .comm import get_comm
-from .hierarchy import DistributedHierarchy
-from .problem import DistributedProblem
+from ..distributed.comm import get_comm
+from ..distributed.hierarchy import DistributedHierarchy
+from ..distributed.problem import DistributedProblem
 
 
 def _friction(tresca_bound: float):
