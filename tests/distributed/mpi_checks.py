@@ -172,6 +172,15 @@ def check_colouring(comm, name, d, h):
     rank0_print(f"OK colouring {name}", comm=comm)
 
 
+def stop_on_distributed_error(comm, run) -> None:
+    """run(); where it raises the error that reaches every rank, each rank prints it and exits 3."""
+    try:
+        run()
+    except DistributedError as e:
+        print(f"rank {comm.rank} stops: {e}", flush=True)
+        sys.exit(3)
+
+
 def main(mode, ranks, *args):
     comm = get_comm()
     if comm.size != ranks:
@@ -180,13 +189,11 @@ def main(mode, ranks, *args):
               flush=True)
         sys.exit(4)
     if mode == "error":
-        try:
+        def bad_input_on_one_rank():
             with raise_together(comm):
                 if comm.rank == min(1, comm.size - 1):
                     raise ValueError("bad input on this rank: levels must be positive, got -1")
-        except DistributedError as e:
-            print(f"rank {comm.rank} stops: {e}", flush=True)
-            sys.exit(3)
+        stop_on_distributed_error(comm, bad_input_on_one_rank)
         return
     if mode == "solve":
         for name in SOLVE_CASES:
@@ -215,13 +222,9 @@ def main(mode, ranks, *args):
         from contactmg.model.obstacle import PlaneObstacle
         from contactmg.model.problem import Dirichlet
         h = DistributedHierarchy.build(hertz_half_disk("triangle"), 2, comm=comm)
-        try:
-            DistributedProblem(h, Material(2000.0, 0.28), [Dirichlet([HERTZ_TOP], (0.0, -0.005))],
-                               contact_tags=[HERTZ_ARC], obstacle=PlaneObstacle((0.0, 0.0), (0.0, -1.0)),
-                               friction=Coulomb(0.4))
-        except DistributedError as e:
-            print(f"rank {comm.rank} stops: {e}", flush=True)
-            sys.exit(3)
+        stop_on_distributed_error(comm, lambda: DistributedProblem(
+            h, Material(2000.0, 0.28), [Dirichlet([HERTZ_TOP], (0.0, -0.005))], contact_tags=[HERTZ_ARC],
+            obstacle=PlaneObstacle((0.0, 0.0), (0.0, -1.0)), friction=Coulomb(0.4)))
         return
     if mode == "output":
         for name in OUTPUT_MESHES:

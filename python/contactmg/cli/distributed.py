@@ -32,7 +32,7 @@ def _refuse_unsupported(args) -> None:
     for name in ("steps", "shear", "load_path", "path"):
         if getattr(args, name, None):
             raise ValueError("load paths are not distributed yet: run on one rank")
-    if getattr(args, "displacement", None) not in (None,) and args.command == "sphere":
+    if args.command == "sphere":
         from ..examples import sphere
         if args.displacement != sphere.DISPLACEMENT:
             raise ValueError("--displacement is not distributed yet (the sphere's default only): run on one rank")

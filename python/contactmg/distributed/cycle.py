@@ -29,6 +29,7 @@ from .operators import (GatheredCoarsest, galerkin_rows, local_transfer, max_dia
                         rotate_rows, sorted_csr, to_block_matrix)
 
 INF = np.inf
+COARSEST_MAX_SWEEPS = 50  # the serial coarsest solve's (solver_options.hpp kCoarsestMaxSweeps)
 
 
 def _any(comm, flag: bool) -> bool:
@@ -224,16 +225,11 @@ class CoarseCorrection:
                 e = 0.5 * float(x @ (S.A @ x)) - float(b @ x)
                 if not e < 0:
                     x[:] = 0.0
-                bounded = (np.isfinite(lo) | np.isfinite(hi)).reshape(-1, d).any(axis=1).astype(np.uint8)
-                if not hasattr(S, "smoother"):
-                    cls = _core.LocalLevelSmoother2D if d == 2 else _core.LocalLevelSmoother3D
-                    S.smoother = cls(to_block_matrix(S.A, d), S.scale)
-                    S.rows = np.arange(S.A.shape[0] // d, dtype=np.int64)
                 xb = x.reshape(-1, d).copy()
-                for s in range(50):
+                lo2, hi2, b2 = lo.reshape(-1, d), hi.reshape(-1, d), b.reshape(-1, d)
+                for s in range(COARSEST_MAX_SWEEPS):
                     before = xb.copy()
-                    S.smoother.sweep(xb, b.reshape(-1, d), S.rows, s % 2 == 0, opt.omega, lo.reshape(-1, d),
-                                     hi.reshape(-1, d), bounded)
+                    S.projected_sweep(xb, b2, lo2, hi2, s % 2 == 0, opt.omega)
                     if np.max(np.abs(xb - before)) <= 1e-14 * np.max(np.abs(xb)):
                         break
                 x = xb.ravel()

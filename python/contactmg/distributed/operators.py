@@ -166,6 +166,18 @@ class GatheredCoarsest:
             out[i] = v
         return out.ravel()
 
+    def projected_sweep(self, x: np.ndarray, b: np.ndarray, lo: np.ndarray, hi: np.ndarray, forward: bool,
+                        omega: float) -> None:
+        """One projected Gauss-Seidel pass over every row (global order), x (n, d) in place."""
+        d = self.d
+        if not hasattr(self, "_smoother"):
+            from .. import _core
+            cls = _core.LocalLevelSmoother2D if d == 2 else _core.LocalLevelSmoother3D
+            self._smoother = cls(to_block_matrix(self.A, d), self.scale)
+            self._rows = np.arange(self.A.shape[0] // d, dtype=np.int64)
+        bounded = (np.isfinite(lo) | np.isfinite(hi)).any(axis=1).astype(np.uint8)
+        self._smoother.sweep(x, b, self._rows, forward, omega, lo, hi, bounded)
+
     def solve(self, b_global: np.ndarray) -> np.ndarray:
         """The exact solution for the global right-hand side (inert dofs zero)."""
         b = np.where(self.inert, 0.0, b_global)
