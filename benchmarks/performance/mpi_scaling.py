@@ -35,7 +35,7 @@ def worker(case: str, levels: int, out: str) -> None:
     from contactmg.examples.distributed import hertz, sphere
     from contactmg.solve.options import SolverOptions
     comm = get_comm()
-    problem = (hertz if case == "hertz" else sphere)(levels, CASES[case][0], 0.0, comm)
+    problem = (hertz if case == "hertz" else sphere)(levels, CASES[case][0], None, comm)
     result = problem.solve(SolverOptions(cycle="F", tol=1e-11))
     u = result.gathered_u()
     lev = problem.hierarchy.levels[-1]

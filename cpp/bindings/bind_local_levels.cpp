@@ -39,7 +39,6 @@ struct LocalContactLevel {
                     DArr coefficients, const std::string& law_name)
       : law(parse_law(law_name)), P(make(A, f, fixed, fixed_values, nodes, normals, gaps, coefficients)) {
     if (law == Law::Tresca) P.set_bounds_to_coefficients();
-    if (law == Law::Coulomb) throw InputError("Coulomb friction is not distributed yet: solve it on one rank");
   }
 
   static ContactProblem<d> make(const BlockMatrix<d>& A, DArr f, BArr fixed, DArr fixed_values, IArr nodes, DArr normals, DArr gaps,
@@ -119,6 +118,21 @@ struct LocalContactLevel {
     return py::make_tuple(to_numpy(state, {(py::ssize_t)cs.size()}), to_numpy(energy, {(py::ssize_t)cs.size()}));
   }
 
+  // The Anderson step's mixed iterate y at the contact nodes listed in `contacts`, given the plain
+  // cycle's result u (laws/contact_node.hpp admit_mixed_node): y adjusted in place, and per node
+  // whether it admits y (the step is taken where every owned node on every rank does).
+  py::array_t<std::uint8_t> admit_mixed(py::array_t<double>& y, const DArr& u, const IArr& contacts) const {
+    double* yy = writable(y, "y", n() * d);
+    require_shape(u, "u", {(py::ssize_t)n(), d});
+    const std::vector<Index> cs = row_list(contacts, P.num_contact());
+    std::vector<std::uint8_t> ok(cs.size(), 1);
+    for (std::size_t m = 0; m < cs.size(); ++m) {
+      const Index k = P.contact_node(cs[m]) * d;
+      ok[m] = admit_mixed_node<d>(P.node(cs[m]), yy + k, u.data() + k);
+    }
+    return to_numpy(ok, {(py::ssize_t)cs.size()});
+  }
+
   py::array_t<double> frames() const {
     const auto& T = P.basis();
     py::array_t<double> Q({(py::ssize_t)T.num_blocks(), (py::ssize_t)d, (py::ssize_t)d});
@@ -188,6 +202,9 @@ void bind_local(py::module_& m) {
       .def("linearize", &L::linearize, py::arg("u"), py::arg("r"), py::arg("contacts"),
            "(mask, lo, hi, hessian, bounded) at the given contact nodes; the friction gradient is added into r")
       .def("contact_state", &L::contact_state, py::arg("u"), py::arg("r"), py::arg("contacts"))
+      .def("admit_mixed", &L::admit_mixed, py::arg("y"), py::arg("u"), py::arg("contacts"),
+           "the Anderson step's mixed iterate y at the given contact nodes, adjusted to the state of u in place; "
+           "per node whether it admits y")
       .def("frames", &L::frames, "the contact frames Q (nc, d, d): local = Q^T canonical")
       .def("to_canonical", &L::to_canonical, py::arg("u"))
       .def_property_readonly("matrix", [](const L& l) { return std::make_shared<BM>(l.P.matrix()); },

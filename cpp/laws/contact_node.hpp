@@ -102,6 +102,26 @@ NodeState node_state(const ContactNode& p, const double* u) {
   return free_tangential_norm<d>(v.data(), p.free) == 0 ? NodeState::Stick : NodeState::Slip;
 }
 
+// The mixed iterate y of an Anderson step (steps/settled_anderson.hpp) at one node, given the plain
+// cycle's result u there: y takes u's contact state exactly (on the gap exactly g, sticking
+// tangentials at u's values), or the node refuses it (an inactive node y puts onto or past the
+// obstacle, a sliding node it stops or turns). Returns whether the node admits y.
+template <int d>
+bool admit_mixed_node(const ContactNode& p, double* y, const double* u) {
+  const NodeState s = node_state<d>(p, u);
+  if (s == NodeState::Free) return y[0] < p.gap;
+  y[0] = p.gap;
+  if (s == NodeState::Stick) {
+    for (int a = 1; a < d; ++a) y[a] = u[a];
+    return true;
+  }
+  if (node_state<d>(p, y) != NodeState::Slip) return false;
+  const Vec<d> vu = slip_increment<d>(p, u), vy = slip_increment<d>(p, y);
+  for (int a = 1; a < d; ++a)
+    if ((vu[a] > 0) != (vy[a] > 0) || (vu[a] < 0) != (vy[a] < 0)) return false;
+  return true;
+}
+
 // The smooth neighbourhood of the smoothed iterate at one node: truncation mask (active normal,
 // sticking tangentials; `base` keeps the Dirichlet dofs truncated), correction bounds (inactive
 // normal, sign of sliding tangentials) and the friction gradient of a sliding node added to the

@@ -336,21 +336,7 @@ class MonotoneMultigridStep {
   bool admit_mixed(std::vector<double>& y, const std::vector<double>& u) const {
     for (Index c = 0; c < P_.num_contact(); ++c) {
       const Index k = P_.contact_node(c) * d;
-      const ContactNode p = P_.node(c);
-      const NodeState s = node_state<d>(p, u.data() + k);
-      if (s == NodeState::Free) {
-        if (!(y[k] < p.gap)) return false;
-        continue;
-      }
-      y[k] = p.gap;
-      if (s == NodeState::Stick) {
-        for (int a = 1; a < d; ++a) y[k + a] = u[k + a];
-        continue;
-      }
-      if (node_state<d>(p, y.data() + k) != NodeState::Slip) return false;
-      const Vec<d> vu = slip_increment<d>(p, u.data() + k), vy = slip_increment<d>(p, y.data() + k);
-      for (int a = 1; a < d; ++a)
-        if ((vu[a] > 0) != (vy[a] > 0) || (vu[a] < 0) != (vy[a] < 0)) return false;
+      if (!admit_mixed_node<d>(P_.node(c), y.data() + k, u.data() + k)) return false;
     }
     return true;
   }

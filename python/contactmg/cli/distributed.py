@@ -1,8 +1,7 @@
 """The hertz and sphere commands on several MPI ranks (`mpirun -n N contactmg hertz ...`): the
 distributed solve (contactmg.distributed), the same JSON keys as on one process plus `ranks` and
-the per-rank seconds and memory; rank 0 alone prints and writes. What is not distributed yet (Coulomb
-friction, other methods, adaptive hierarchies, load paths, plots) ends with exit status 2 and one
-line that says so."""
+the per-rank seconds and memory; rank 0 alone prints and writes. What is not distributed yet (other
+methods, adaptive hierarchies, load paths, plots) ends with exit status 2 and one line that says so."""
 from __future__ import annotations
 
 import sys
@@ -20,8 +19,6 @@ def wanted() -> bool:
 
 
 def _refuse_unsupported(args) -> None:
-    if args.friction > 0:
-        raise ValueError("Coulomb friction is not distributed yet: run with --friction 0 (frictionless) or on one rank")
     if args.method != "nmg":
         raise ValueError(f"--method {args.method} is not distributed yet: the distributed solve is nmg (truncated "
                          "monotone multigrid); run on one rank")
@@ -43,6 +40,7 @@ def run(args) -> int:
     from ..distributed import DistributedError, get_comm
     from ..distributed.comm import op
     from ..examples.distributed import hertz, sphere
+    from ..model.friction import Coulomb
     from ..solve.options import SolverOptions
 
     comm = get_comm()
@@ -54,7 +52,7 @@ def run(args) -> int:
         return EXIT_BAD_INPUT
     try:  # the distributed errors reach every rank together (raise_together)
         make = hertz if args.command == "hertz" else sphere
-        problem = make(args.levels, args.cell, 0.0, comm)
+        problem = make(args.levels, args.cell, Coulomb(args.friction) if args.friction > 0 else None, comm)
         stop = stop_fields(args)
         result = problem.solve(SolverOptions(method="nmg", cycle=args.cycle, nu1=args.nu1, nu2=args.nu2,
                                              max_cycles=args.max_cycles, **stop))

@@ -22,6 +22,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .. import _core
+from .anderson import DistributedAnderson
 from .colouring import colour_level
 from .comm import is_serial, op
 from .exchange import exact_dot, exact_sum
@@ -237,9 +238,11 @@ class CoarseCorrection:
 
 
 class DistributedMonotoneStep:
-    """One cycle of truncated monotone multigrid (frictionless, Tresca) on the ranks: nu1 nonlinear
-    sweeps, the linearization at the contact nodes, the coarse correction of the truncated problem,
-    nu2 sweeps back; returns ||u_new - u_old||_A (exact sums)."""
+    """One cycle of truncated monotone multigrid on the ranks: nu1 nonlinear sweeps, the
+    linearization at the contact nodes, the coarse correction of the truncated problem, nu2 sweeps
+    back; under Coulomb friction (Algorithm 2: the coarse problem freezes the bound F |s_n|) the
+    settled cycles Anderson-mixed as in the serial step (steps/monotone_mg_step.hpp); returns
+    ||u_new - u_old||_A (exact sums)."""
 
     def __init__(self, comm, fine, hierarchy, opt):
         self.comm, self.fine, self.opt = comm, fine, opt
@@ -261,6 +264,9 @@ class DistributedMonotoneStep:
                                                "post_smooth", "norm")}
         self.notes = []
         self.rebuilds = 0  # coarse hierarchies built (the first included)
+        # Coulomb: the frozen bound leaves a slow linear contraction once the state settles
+        self.anderson = DistributedAnderson(comm, self.owned_dofs) if fine.law == "coulomb" else None
+        self.best_step = INF  # the smallest ||u^{k+1} - u^k||_A of the solve
         if fine.frames.size and not np.all(np.isin(np.round(np.abs(fine.frames), 15), (0.0, 1.0))):
             self.notes.append("rotated contact frames: the plain truncated coarse correction (the serial solver "
                               "projects it there)")
@@ -314,6 +320,38 @@ class DistributedMonotoneStep:
         H = sp.bsr_matrix((blocks, np.arange(n), np.arange(n + 1)), shape=(n * d, n * d)).tocsr()
         return sorted_csr(self.A + H)
 
+    def energy_norm(self, v: np.ndarray) -> float:
+        """||v||_A over the owned rows (exact sums), v flat over the local dofs (ghosts fresh)."""
+        Av = self.A @ v
+        o = self.owned_dofs
+        return float(np.sqrt(max(exact_dot(v[o], Av[o], self.comm), 0.0)))
+
+    def any_sliding(self, u: np.ndarray) -> bool:
+        """Whether a contact node slides on any rank."""
+        state, _ = self.fine.core.contact_state(u, np.zeros_like(u), self.fine.owned_contacts)
+        return _any(self.comm, bool(np.any(state == 2)))
+
+    def admit_mixed(self, y: np.ndarray, plain: np.ndarray) -> bool:
+        """The mixed iterate y takes the contact state of the plain cycle's result at every contact
+        node (ghosts as their owners), or is refused where any owned node on any rank refuses it."""
+        fine, d = self.fine, self.d
+        every = np.arange(len(fine.contact_nodes), dtype=np.int64)
+        ok = fine.core.admit_mixed(y.reshape(-1, d), plain.reshape(-1, d), every)
+        return not _any(self.comm, not bool(np.all(ok[fine.owned_contacts])))
+
+    def mix(self, old: np.ndarray, u: np.ndarray, state_changed: bool) -> float:
+        """The Anderson step of a Coulomb cycle x = old -> G(x) = u (in place), as in the serial
+        step: no mixing without a sliding node; the history restarts when the truncation changed,
+        unless the plain step is no smaller than every step before (then the state changes because
+        the cycle does not converge yet). Returns the step when it was measured here, else -1."""
+        if not self.any_sliding(u):
+            self.anderson.reset()
+            return -1.0
+        change = self.energy_norm((u - old).ravel()) if state_changed else 0.0
+        restart = state_changed and change < self.best_step
+        mixed = self.anderson.step(old.ravel(), u.ravel(), self.admit_mixed, restart)
+        return change if state_changed and not mixed else -1.0
+
     def iterate(self, u: np.ndarray) -> float:
         """One cycle on u (n, d, in place); returns ||u_new - u_old||_A."""
         opt, ph = self.opt, self.phase_seconds
@@ -332,6 +370,7 @@ class DistributedMonotoneStep:
         mask, lo, hi, hess_nodes, hess, bounded, r = self.linearize(u)
         lap("linearize")
         key = (mask, hess_nodes, hess)
+        state_changed = _any(self.comm, self.built is None or not np.array_equal(mask, self.built[0]))
         changed = self.built is None or not (np.array_equal(mask, self.built[0]) and np.array_equal(hess_nodes, self.built[1])
                                              and np.array_equal(hess, self.built[2]))
         if _any(self.comm, changed):
@@ -345,9 +384,9 @@ class DistributedMonotoneStep:
         for _ in range(opt.nu2):
             self.sweep(u, False, opt.omega_post)
         lap("post_smooth")
-        du = (u - old).ravel()
-        Adu = self.A @ du
-        step = float(np.sqrt(max(exact_dot(du[self.owned_dofs], Adu[self.owned_dofs], self.comm), 0.0)))
+        measured = self.mix(old, u, state_changed) if self.anderson is not None else -1.0
+        step = measured if measured >= 0 else self.energy_norm((u - old).ravel())
+        self.best_step = min(self.best_step, step)
         lap("norm")
         return step
 
@@ -371,7 +410,4 @@ class DistributedMonotoneStep:
         """||S(u) - u||_A for one forward nonlinear sweep S (u unchanged)."""
         v = u.copy()
         self.sweep(v, True, self.opt.omega)
-        dv = (v - u).ravel()
-        Adv = self.A @ dv
-        o = self.owned_dofs
-        return float(np.sqrt(max(exact_dot(dv[o], Adv[o], self.comm), 0.0)))
+        return self.energy_norm((v - u).ravel())

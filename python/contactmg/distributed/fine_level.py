@@ -105,16 +105,13 @@ class LocalFine:
 
 
 def check_description(material, friction, point_loads=(), springs=None) -> None:
-    """What the distributed solve takes: one material, no point loads or springs, frictionless or
-    Tresca contact. Raises a ValueError saying what is not distributed yet."""
+    """What the distributed solve takes: one material, no point loads or springs, frictionless,
+    Tresca or Coulomb contact. Raises a ValueError saying what is not distributed yet."""
     if not isinstance(material, Material):
         raise ValueError("materials per region are not distributed yet: give one Material, or solve on one rank")
     if point_loads:
         raise ValueError("point loads are not distributed yet: solve on one rank")
     if springs:
         raise ValueError("elastic supports (springs) are not distributed yet: solve on one rank")
-    if isinstance(friction, Coulomb):
-        raise ValueError("Coulomb friction is not distributed yet (Algorithm 2 for Coulomb needs its Anderson "
-                         "mixing across ranks): solve on one rank, or use Frictionless() or Tresca(bound)")
-    if friction is not None and not isinstance(friction, (Frictionless, Tresca)):
-        raise TypeError("friction must be Frictionless() or Tresca(bound)")
+    if friction is not None and not isinstance(friction, (Frictionless, Tresca, Coulomb)):
+        raise TypeError("friction must be Frictionless(), Tresca(bound) or Coulomb(coefficient)")
