@@ -1,22 +1,21 @@
-"""Checks run under mpirun by test_mpi_ranks.py: `mpirun -n N python mpi_checks.py MODE N`.
+"""Checks run under mpirun by the distributed tests: `mpirun -n N python mpi_checks.py MODE [FOLDER] N`,
+MODE one part or several joined by commas (run in one launch, in that order).
 
-MODE "all": the distributed hierarchy gathered equals the serial one (points bitwise, with new
+Part "all": the distributed hierarchy gathered equals the serial one (points bitwise, with new
 boundary nodes projected onto curved boundaries; cells, facets, prolongation rows, owners), the halo
 exchange gives every ghost its owner's value, exact sums equal math.fsum of the whole, and the node
 colouring equals the serial greedy rule and is valid, for triangles, quadrilaterals, tetrahedra and
 hexahedra. Rank 0 prints "OK <check>" per check and "ALL OK" at the end; a failed check raises,
 which ends every rank (get_comm sets abort_on_uncaught on several ranks).
+Part "solve": the distributed solves of solve_checks.CASES, rank 0 saving each (displacement,
+cycles, norms, energies) as FOLDER/<case>.npz; the test compares them.
+Part "cli": `contactmg hertz` (Coulomb) and `contactmg sphere` on the ranks (JSON and VTU into
+FOLDER) and a run with an option not distributed yet; rank 0 prints each exit status.
+Part "output": the finest level of a triangle and a tetrahedron hierarchy written as .pvtu and
+gathered .vtu into FOLDER (output_checks.write_fields); the test process checks the files.
 MODE "error": rank 1 fails a guarded input check; every rank prints the error it gets.
 MODE "uncaught": rank 1 raises outside any guard while the others wait in a barrier: the hook that
-get_comm sets must end them.
-MODE "solve" (`mpi_checks.py solve FOLDER N`): the distributed solves of solve_checks.CASES, rank 0
-saving each (displacement, cycles, norms, energies) as FOLDER/<case>.npz; the test compares them.
-MODE "cli" (`mpi_checks.py cli FOLDER N`): `contactmg hertz` and `contactmg sphere` on the ranks
-(JSON and VTU into FOLDER) and a Coulomb hertz run; rank 0 prints each exit status.
-MODE "coulomb": a Coulomb problem, not distributed yet: every rank prints the error it gets.
-MODE "output" (`mpi_checks.py output FOLDER N`): the finest level of a triangle and a tetrahedron
-hierarchy written as .pvtu and gathered .vtu into FOLDER (output_checks.write_fields); the test
-process checks the files."""
+get_comm sets must end them."""
 import math
 import sys
 from fractions import Fraction
@@ -181,61 +180,8 @@ def stop_on_distributed_error(comm, run) -> None:
         sys.exit(3)
 
 
-def main(mode, ranks, *args):
-    comm = get_comm()
-    if comm.size != ranks:
-        # a launcher of another MPI than mpi4py's starts separate one-rank programs
-        print(f"started as {ranks} ranks, this rank sees {comm.size}: the launcher does not belong to mpi4py's MPI",
-              flush=True)
-        sys.exit(4)
-    if mode == "error":
-        def bad_input_on_one_rank():
-            with raise_together(comm):
-                if comm.rank == min(1, comm.size - 1):
-                    raise ValueError("bad input on this rank: levels must be positive, got -1")
-        stop_on_distributed_error(comm, bad_input_on_one_rank)
-        return
-    if mode == "solve":
-        for name in SOLVE_CASES:
-            got = solve_case(name, comm)
-            if comm.rank == 0:
-                np.savez(f"{args[0]}/{name}.npz", **got)
-            rank0_print(f"OK solve {name}", comm=comm)
-        return
-    if mode == "cli":  # mpi_checks.py cli FOLDER N: the commands on the ranks, their exit statuses
-        from contactmg.cli.main import main as cli_main
-        folder = args[0]
-        runs = {"hertz": ["hertz", "--levels", "4", "--friction", "0", "--json", f"{folder}/hertz.json",
-                          "--vtu", f"{folder}/hertz.vtu", "-q"],
-                "sphere": ["sphere", "--levels", "2", "--cell", "tetra", "--friction", "0", "--json",
-                           f"{folder}/sphere.json", "-q"],
-                "coulomb": ["hertz", "--levels", "3", "--friction", "0.4", "-q"]}
-        for name, argv in runs.items():
-            status = cli_main(argv)
-            rank0_print(f"EXIT {name} {status}", comm=comm)
-        return
-    if mode == "coulomb":
-        from contactmg.distributed import DistributedProblem
-        from contactmg.mesh.generators import HERTZ_ARC, HERTZ_TOP
-        from contactmg.model.friction import Coulomb
-        from contactmg.model.material import Material
-        from contactmg.model.obstacle import PlaneObstacle
-        from contactmg.model.problem import Dirichlet
-        h = DistributedHierarchy.build(hertz_half_disk("triangle"), 2, comm=comm)
-        stop_on_distributed_error(comm, lambda: DistributedProblem(
-            h, Material(2000.0, 0.28), [Dirichlet([HERTZ_TOP], (0.0, -0.005))], contact_tags=[HERTZ_ARC],
-            obstacle=PlaneObstacle((0.0, 0.0), (0.0, -1.0)), friction=Coulomb(0.4)))
-        return
-    if mode == "output":
-        for name in OUTPUT_MESHES:
-            write_fields(args[0], name, comm)
-            rank0_print(f"OK output {name}", comm=comm)
-        return
-    if mode == "uncaught":
-        if comm.rank == min(1, comm.size - 1):
-            raise RuntimeError("an unguarded failure on one rank")
-        comm.barrier()
-        return
+def check_pieces(comm) -> None:
+    """Part "all": hierarchy, halo, prolongation and colouring of every cell type; exact sums."""
     for name, (make, projector) in MESHES.items():
         mesh = make()
         h = MeshHierarchy.build(mesh, LEVELS, projector=projector) if comm.rank == 0 else None
@@ -262,6 +208,66 @@ def main(mode, ranks, *args):
     check_halo(comm, "ball", d)
     check_sums(comm)
     rank0_print("ALL OK", comm=comm)
+
+
+
+
+def solve_cases(comm, folder: str) -> None:
+    """Part "solve": each case of solve_checks.CASES, saved by rank 0 as FOLDER/<case>.npz."""
+    for name in SOLVE_CASES:
+        got = solve_case(name, comm)
+        if comm.rank == 0:
+            np.savez(f"{folder}/{name}.npz", **got)
+        rank0_print(f"OK solve {name}", comm=comm)
+
+
+def run_commands(comm, folder: str) -> None:
+    """Part "cli": the commands on the ranks (JSON and VTU into FOLDER), rank 0 printing each exit
+    status: Coulomb hertz, frictionless sphere, and an option not distributed yet."""
+    from contactmg.cli.main import main as cli_main
+    runs = {"hertz": ["hertz", "--levels", "4", "--friction", "0.4", "--json", f"{folder}/hertz.json",
+                      "--vtu", f"{folder}/hertz.vtu", "-q"],
+            "sphere": ["sphere", "--levels", "2", "--cell", "tetra", "--friction", "0", "--json",
+                       f"{folder}/sphere.json", "-q"],
+            "adaptive": ["hertz", "--levels", "3", "--hierarchy", "adaptive", "-q"]}
+    for name, argv in runs.items():
+        status = cli_main(argv)
+        rank0_print(f"EXIT {name} {status}", comm=comm)
+
+
+def write_outputs(comm, folder: str) -> None:
+    """Part "output": .pvtu and gathered .vtu of output_checks.MESHES into FOLDER."""
+    for name in OUTPUT_MESHES:
+        write_fields(folder, name, comm)
+        rank0_print(f"OK output {name}", comm=comm)
+
+
+PARTS = {"all": lambda comm, folder: check_pieces(comm), "solve": solve_cases, "cli": run_commands,
+         "output": write_outputs}
+
+
+def main(mode, ranks, *args):
+    comm = get_comm()
+    if comm.size != ranks:
+        # a launcher of another MPI than mpi4py's starts separate one-rank programs
+        print(f"started as {ranks} ranks, this rank sees {comm.size}: the launcher does not belong to mpi4py's MPI",
+              flush=True)
+        sys.exit(4)
+    if mode == "error":
+        def bad_input_on_one_rank():
+            with raise_together(comm):
+                if comm.rank == min(1, comm.size - 1):
+                    raise ValueError("bad input on this rank: levels must be positive, got -1")
+        stop_on_distributed_error(comm, bad_input_on_one_rank)
+        return
+    if mode == "uncaught":
+        if comm.rank == min(1, comm.size - 1):
+            raise RuntimeError("an unguarded failure on one rank")
+        comm.barrier()
+        return
+    # parts joined by commas run in one launch (an mpirun start costs seconds on a small machine)
+    for part in mode.split(","):
+        PARTS[part](comm, args[0] if args else "")
 
 
 if __name__ == "__main__":

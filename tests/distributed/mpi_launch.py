@@ -52,3 +52,26 @@ def run_ranks(n: int, *args: str, timeout: float = 60.0) -> subprocess.Completed
         out, err = proc.communicate()
         raise AssertionError(f"mpirun -n {n} {' '.join(args)} did not end within {timeout} s (a hang):\n{out}\n{err}")
     return subprocess.CompletedProcess(cmd, proc.returncode, out, err)
+
+
+# The parts of mpi_checks.py each rank count runs, in one launch per rank count: the pieces on
+# 1-4 ranks, output on 2 and 3, the solves on 2-4 (one rank: in the test process), the commands on 2.
+SUITE = {1: "all", 2: "all,output,solve,cli", 3: "all,output,solve", 4: "all,solve"}
+_LAUNCHED = {}
+
+
+def suite(n: int):
+    """The launch of SUITE[n] on n ranks (once per test run): (CompletedProcess, folder of its files)."""
+    if n not in _LAUNCHED:
+        import tempfile
+        folder = tempfile.mkdtemp(prefix=f"contactmg-mpi-{n}-")
+        _LAUNCHED[n] = (run_ranks(n, SUITE[n], folder, timeout=150 + 150 * n), folder)
+    return _LAUNCHED[n]
+
+
+def require_part(n: int, part: str):
+    """The suite's launch on n ranks, failing the test with its output where it did not end well."""
+    assert part in SUITE[n].split(","), f"{part} is not in the {n}-rank suite"
+    r, folder = suite(n)
+    assert r.returncode == 0, f"mpirun -n {n} {SUITE[n]} failed (exit {r.returncode}):\n{r.stdout}\n{r.stderr}"
+    return r, folder

@@ -1,10 +1,10 @@
 """The distributed pieces on 1-4 ranks (oversubscribed on a small machine), each rank count in one
-mpirun launch of mpi_checks.py: hierarchy equal to the serial one, halo exchange, exact sums,
+mpirun launch of mpi_checks.py (mpi_launch.SUITE, shared with test_distributed_solve.py): hierarchy equal to the serial one, halo exchange, exact sums,
 partition-independent colouring; distributed output (.pvtu pieces and the gathered .vtu) equal to
 the serial mesh; and failures on one rank that end every rank."""
 import pytest
 
-from mpi_launch import missing, run_ranks
+from mpi_launch import missing, require_part, run_ranks
 from output_checks import MESHES as OUTPUT_MESHES, check_files
 
 pytestmark = [pytest.mark.mpi, pytest.mark.skipif(bool(missing()), reason=missing() or "MPI available")]
@@ -14,8 +14,7 @@ CELLS = ("triangle", "quad", "tetra", "hexahedron")
 
 @pytest.mark.parametrize("ranks", [1, 2, 3, 4])
 def test_distributed_checks_on_ranks(ranks):
-    r = run_ranks(ranks, "all")
-    assert r.returncode == 0, f"mpirun -n {ranks} failed (exit {r.returncode}):\n{r.stdout}\n{r.stderr}"
+    r, _ = require_part(ranks, "all")
     lines = set(r.stdout.splitlines())
     checks = ("hierarchy", "halo", "prolongation", "colouring")
     expected = {f"OK {check} {cell}" for check in checks for cell in CELLS}
@@ -28,16 +27,15 @@ def test_distributed_checks_on_ranks(ranks):
 
 
 @pytest.mark.parametrize("ranks", [2, 3])
-def test_pvtu_and_gathered_vtu_on_ranks_equal_the_serial_mesh(ranks, tmp_path):
-    r = run_ranks(ranks, "output", str(tmp_path))
-    assert r.returncode == 0, f"mpirun -n {ranks} failed (exit {r.returncode}):\n{r.stdout}\n{r.stderr}"
+def test_pvtu_and_gathered_vtu_on_ranks_equal_the_serial_mesh(ranks):
+    r, folder = require_part(ranks, "output")
     for name in OUTPUT_MESHES:
         assert f"OK output {name}" in r.stdout.splitlines(), r.stdout
-        check_files(str(tmp_path), name, ranks)
+        check_files(folder, name, ranks)
 
 
-@pytest.mark.parametrize("ranks", [2, 3])
-def test_bad_input_on_one_rank_ends_every_rank_with_its_message(ranks):
+def test_bad_input_on_one_rank_ends_every_rank_with_its_message():
+    ranks = 3
     r = run_ranks(ranks, "error", timeout=30)
     assert r.returncode != 0
     for rank in range(ranks):
