@@ -1,11 +1,12 @@
 """A contact problem solved on MPI ranks: the description of one body against a rigid obstacle on a
-DistributedHierarchy, and its solve by truncated monotone multigrid (frictionless and Tresca
-contact), the same cycle as the serial solver's on each rank's part.
+DistributedHierarchy, and its solve by the nonlinear monotone multigrid of Algorithm 2
+(frictionless, Tresca and Coulomb contact), the same cycle as the serial solver's on each rank's
+part.
 
     comm = contactmg.distributed.get_comm()
     h = DistributedHierarchy.build(coarse_mesh, levels, comm, projector=...)
     problem = DistributedProblem(h, Material(E, nu), [Dirichlet(...)], contact_tags=[...],
-                                 obstacle=PlaneObstacle(...), friction=Tresca(0.1))
+                                 obstacle=PlaneObstacle(...), friction=Coulomb(0.4))
     result = problem.solve(SolverOptions(cycle="V"))
     result.write_pvtu("out/result.pvtu")
 
@@ -130,8 +131,9 @@ class DistributedResult:
 
 class DistributedProblem:
     """Linear elasticity of one body on a DistributedHierarchy with contact on its `contact_tags`
-    facets against the rigid `obstacle`: Frictionless() (the default) or Tresca(bound); loads: body
-    force, gravity, tractions and pressures as in Body. Collective: every rank builds its part."""
+    facets against the rigid `obstacle`: Frictionless() (the default), Tresca(bound) or
+    Coulomb(coefficient); loads: body force, gravity, tractions and pressures as in Body.
+    Collective: every rank builds its part."""
 
     def __init__(self, hierarchy, material, dirichlet: Sequence[Dirichlet] = (), contact_tags: Sequence[int] = (),
                  obstacle=None, friction=None, body_force=None, traction=None, pressure=None, gravity=None,
