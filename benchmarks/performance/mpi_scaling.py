@@ -1,6 +1,6 @@
-"""Scaling of the distributed solve (contactmg.distributed, truncated monotone multigrid, frictionless
-Hertz half disk and sphere) on MPI ranks, beside the serial solver on threads and the machine's
-measured read bandwidth.
+"""Scaling of the distributed solve (contactmg.distributed, Algorithm 2's monotone multigrid, the
+Hertz half disk and sphere under Coulomb friction F = 0.4 by default) on MPI ranks, beside the serial
+solver on threads and the machine's measured read bandwidth.
 
 - strong: one problem on 1, 2, 4, ... ranks (up to --ranks), and the serial solver of the same
   problem on as many threads;
@@ -11,7 +11,8 @@ measured read bandwidth.
   (oversubscribed: timings then say nothing about scaling), and whether the displacement equals
   the one-rank displacement bit for bit.
 
-    python benchmarks/performance/mpi_scaling.py [--ranks 16] [--level2d 9] [--level3d 4] [--quick] [--json PATH]
+    python benchmarks/performance/mpi_scaling.py [--ranks 16] [--level2d 9] [--level3d 4] [--friction 0.4]
+                                                 [--quick] [--json PATH]
 """
 import json
 import os
@@ -29,13 +30,15 @@ from _common import parser, write_result  # noqa: E402
 CASES = {"hertz": ("triangle", 4), "sphere": ("tetra", 8)}  # cell, dofs growth per level
 
 
-def worker(case: str, levels: int, out: str) -> None:
+def worker(case: str, levels: int, friction: float, out: str) -> None:
     """Under mpirun: solve, save the gathered displacement and the slowest rank's facts."""
     from contactmg.distributed import get_comm
     from contactmg.examples.distributed import hertz, sphere
+    from contactmg.model.friction import Coulomb
     from contactmg.solve.options import SolverOptions
     comm = get_comm()
-    problem = (hertz if case == "hertz" else sphere)(levels, CASES[case][0], None, comm)
+    law = Coulomb(friction) if friction > 0 else None
+    problem = (hertz if case == "hertz" else sphere)(levels, CASES[case][0], law, comm)
     result = problem.solve(SolverOptions(cycle="F", tol=1e-11))
     u = result.gathered_u()
     lev = problem.hierarchy.levels[-1]
@@ -56,11 +59,11 @@ def launcher() -> str:
     return str(local) if local.exists() else "mpiexec"
 
 
-def run_ranks(case: str, levels: int, ranks: int, tmp: str) -> dict:
+def run_ranks(case: str, levels: int, ranks: int, friction: float, tmp: str) -> dict:
     out = os.path.join(tmp, f"{case}-{levels}-{ranks}")
     env = dict(os.environ, OMP_NUM_THREADS="1", OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
                PYTHONPATH=os.pathsep.join([str(HERE.parents[2] / "python"), os.environ.get("PYTHONPATH", "")]))
-    cmd = [launcher(), "--oversubscribe", "-n", str(ranks), sys.executable, str(HERE), "--worker", case, str(levels), out]
+    cmd = [launcher(), "--oversubscribe", "-n", str(ranks), sys.executable, str(HERE), "--worker", case, str(levels), str(friction), out]
     subprocess.run(cmd, check=True, env=env, stdout=subprocess.DEVNULL)
     with open(out + ".json") as fh:
         row = json.load(fh)
@@ -68,13 +71,13 @@ def run_ranks(case: str, levels: int, ranks: int, tmp: str) -> dict:
     return row
 
 
-def threads_row(case: str, levels: int, threads: int) -> dict:
+def threads_row(case: str, levels: int, friction: float, threads: int) -> dict:
     import contactmg
     from contactmg.examples.hertz import hertz_problem
     from contactmg.examples.sphere import sphere_problem
     from contactmg.solve.options import SolverOptions
     make = hertz_problem if case == "hertz" else sphere_problem
-    r = contactmg.Solver(make(CASES[case][0], levels, 0.0), SolverOptions(method="nmg", tol=1e-11, threads=threads)).solve()
+    r = contactmg.Solver(make(CASES[case][0], levels, friction), SolverOptions(method="nmg", tol=1e-11, threads=threads)).solve()
     return {"cycles": r.cycles, "seconds": r.solve_seconds, "converged": r.converged}
 
 
@@ -86,12 +89,13 @@ def bandwidth(cores: int) -> dict:
 
 def main():
     if len(sys.argv) > 1 and sys.argv[1] == "--worker":
-        worker(sys.argv[2], int(sys.argv[3]), sys.argv[4])
+        worker(sys.argv[2], int(sys.argv[3]), float(sys.argv[4]), sys.argv[5])
         return 0
     ap = parser(__doc__)
     ap.add_argument("--ranks", type=int, default=os.cpu_count())
     ap.add_argument("--level2d", type=int, default=7)
     ap.add_argument("--level3d", type=int, default=3)
+    ap.add_argument("--friction", type=float, default=0.4, help="Coulomb coefficient F (0: frictionless)")
     a = ap.parse_args()
     cores = os.cpu_count()
     max_ranks = 2 if a.quick else a.ranks
@@ -102,9 +106,9 @@ def main():
         for case in ("hertz",) if a.quick else ("hertz", "sphere"):
             base = None
             for r in counts:  # strong
-                row = run_ranks(case, levels[case], r, tmp)
+                row = run_ranks(case, levels[case], r, a.friction, tmp)
                 base = base or row
-                t = threads_row(case, levels[case], r)
+                t = threads_row(case, levels[case], a.friction, r)
                 rows.append({"kind": "strong", "case": case, "ranks": r, "levels": levels[case], "dofs": row["dofs"],
                              "cycles": row["cycles"], "seconds_per_cycle": row["seconds"] / row["cycles"],
                              "speedup": (base["seconds"] / base["cycles"]) / (row["seconds"] / row["cycles"]),
@@ -115,7 +119,7 @@ def main():
                 rows[-1]["efficiency"] = rows[-1]["speedup"] / r
             growth, level, r, base = CASES[case][1], levels[case], 1, None
             while r <= max_ranks:  # weak: a level more per `growth` ranks
-                row = run_ranks(case, level, r, tmp)
+                row = run_ranks(case, level, r, a.friction, tmp)
                 base = base or row
                 rows.append({"kind": "weak", "case": case, "ranks": r, "levels": level, "dofs": row["dofs"],
                              "dofs_per_rank": row["dofs"] / r, "cycles": row["cycles"],
@@ -133,7 +137,7 @@ def main():
               f"{r['bytes_per_owned_dof']:>6.0f} {r.get('threads_cycles', ''):>7} "
               f"{r.get('threads_seconds_per_cycle', float('nan')):>9.3f} {str(r.get('bitwise_as_one_rank', '')):>7} "
               f"{str(r['oversubscribed']):>5}")
-    write_result(__file__, a, {"cores": cores, "bandwidth": bw, "rows": rows})
+    write_result(__file__, a, {"cores": cores, "friction": a.friction, "bandwidth": bw, "rows": rows})
     ok = all(r.get("bitwise_as_one_rank", True) for r in rows)
     return 0 if ok else 1
 
