@@ -7,9 +7,10 @@ solver on threads and the machine's measured read bandwidth.
 - weak: about the same dofs per rank (a level more per 4 ranks in 2D, per 8 in 3D);
 - per row: cycles, seconds per cycle (the slowest rank's solve over the cycles), speed-up and
   efficiency against one rank, the largest rank's bytes per dof of its own nodes (matrices,
-  transfers, vectors held by the cycle), whether the ranks were more than the cores
-  (oversubscribed: timings then say nothing about scaling), and whether the displacement equals
-  the one-rank displacement bit for bit.
+  transfers, vectors held by the cycle), "mem": the largest rank's bytes per local dof (owned and
+  ghost) over the serial core's bytes per dof (the target: at most 1.15), whether the ranks were
+  more than the cores (oversubscribed: timings then say nothing about scaling), and whether the
+  displacement equals the one-rank displacement bit for bit.
 
     python benchmarks/performance/mpi_scaling.py [--ranks 16] [--level2d 9] [--level3d 4] [--friction 0.4]
                                                  [--quick] [--json PATH]
@@ -43,7 +44,8 @@ def worker(case: str, levels: int, friction: float, out: str) -> None:
     u = result.gathered_u()
     lev = problem.hierarchy.levels[-1]
     owned = int(np.count_nonzero(lev.owner == lev.rank)) * lev.points.shape[1]
-    facts = comm.gather((result.seconds, result.memory_bytes, owned), root=0)
+    local = len(lev.gid) * lev.points.shape[1]  # owned and ghost dofs
+    facts = comm.gather((result.seconds, result.memory_bytes, owned, local), root=0)
     if comm.rank == 0:
         np.save(out + ".npy", u)
         seconds = max(f[0] for f in facts)
@@ -51,6 +53,7 @@ def worker(case: str, levels: int, friction: float, out: str) -> None:
             json.dump({"cycles": result.cycles, "converged": result.converged, "seconds": seconds,
                        "dofs": int(lev.num_global_nodes * lev.points.shape[1]),
                        "bytes_per_owned_dof": max(f[1] / max(f[2], 1) for f in facts),
+                       "bytes_per_local_dof": max(f[1] / max(f[3], 1) for f in facts),
                        "phase_seconds": result.phase_seconds}, fh)
 
 
@@ -77,8 +80,10 @@ def threads_row(case: str, levels: int, friction: float, threads: int) -> dict:
     from contactmg.examples.sphere import sphere_problem
     from contactmg.solve.options import SolverOptions
     make = hertz_problem if case == "hertz" else sphere_problem
-    r = contactmg.Solver(make(CASES[case][0], levels, friction), SolverOptions(method="nmg", tol=1e-11, threads=threads)).solve()
-    return {"cycles": r.cycles, "seconds": r.solve_seconds, "converged": r.converged}
+    solver = contactmg.Solver(make(CASES[case][0], levels, friction), SolverOptions(method="nmg", tol=1e-11, threads=threads))
+    r = solver.solve()
+    return {"cycles": r.cycles, "seconds": r.solve_seconds, "converged": r.converged,
+            "core_bytes_per_dof": solver.memory_bytes()["core"] / r.displacement.size}
 
 
 def bandwidth(cores: int) -> dict:
@@ -113,6 +118,9 @@ def main():
                              "cycles": row["cycles"], "seconds_per_cycle": row["seconds"] / row["cycles"],
                              "speedup": (base["seconds"] / base["cycles"]) / (row["seconds"] / row["cycles"]),
                              "bytes_per_owned_dof": row["bytes_per_owned_dof"], "oversubscribed": r > cores,
+                             "bytes_per_local_dof": row["bytes_per_local_dof"],
+                             "serial_bytes_per_dof": t["core_bytes_per_dof"],
+                             "memory_ratio": row["bytes_per_local_dof"] / t["core_bytes_per_dof"],
                              "bitwise_as_one_rank": bool(np.array_equal(row["u"], base["u"])),
                              "threads_cycles": t["cycles"], "threads_seconds_per_cycle": t["seconds"] / t["cycles"],
                              "phase_seconds": row["phase_seconds"]})
@@ -130,11 +138,11 @@ def main():
     bw = bandwidth(min(cores, max_ranks))
     print(f"cores {cores}; read bandwidth {bw}")
     print(f"{'kind':>6} {'case':>6} {'ranks':>5} {'dofs':>9} {'cycles':>6} {'s/cycle':>8} {'speedup':>7} {'eff':>5} "
-          f"{'B/dof':>6} {'thr cyc':>7} {'thr s/cyc':>9} {'bitwise':>7} {'over':>5}")
+          f"{'B/dof':>6} {'mem':>5} {'thr cyc':>7} {'thr s/cyc':>9} {'bitwise':>7} {'over':>5}")
     for r in rows:
         print(f"{r['kind']:>6} {r['case']:>6} {r['ranks']:>5} {r['dofs']:>9} {r['cycles']:>6} {r['seconds_per_cycle']:>8.3f} "
               f"{r.get('speedup', r.get('time_ratio', 0)):>7.2f} {r.get('efficiency', float('nan')):>5.2f} "
-              f"{r['bytes_per_owned_dof']:>6.0f} {r.get('threads_cycles', ''):>7} "
+              f"{r['bytes_per_owned_dof']:>6.0f} {r.get('memory_ratio', float('nan')):>5.2f} {r.get('threads_cycles', ''):>7} "
               f"{r.get('threads_seconds_per_cycle', float('nan')):>9.3f} {str(r.get('bitwise_as_one_rank', '')):>7} "
               f"{str(r['oversubscribed']):>5}")
     write_result(__file__, a, {"cores": cores, "friction": a.friction, "bandwidth": bw, "rows": rows})
