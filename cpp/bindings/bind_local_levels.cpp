@@ -56,12 +56,24 @@ struct LocalContactLevel {
 
   Index n() const { return P.num_nodes(); }
 
-  void sweep(py::array_t<double>& u, const IArr& rows, bool forward, double omega) {
+  // threads > 1: the rows are one colour (no two coupled), updated on that many threads; a row's
+  // update reads no row of its own colour, so the bits are those of one thread.
+  void sweep(py::array_t<double>& u, const IArr& rows, bool forward, double omega, int threads) {
     double* x = writable(u, "u", n() * d);
     if (!(omega > 0 && omega < 2)) throw InputError("omega must lie in (0, 2)");
-    const SweepOrder order(row_list(rows, n()));
+    if (threads < 1) throw InputError("threads must be >= 1");
+    const std::vector<Index> list = row_list(rows, n());
     py::gil_scoped_release free;
-    with_law(law, [&](auto L) { NonlinearGaussSeidel<d, decltype(L)>::sweep(P, x, forward, order, omega); });
+    if (threads == 1) {
+      const SweepOrder order(list);
+      with_law(law, [&](auto L) { NonlinearGaussSeidel<d, decltype(L)>::sweep(P, x, forward, order, omega); });
+      return;
+    }
+    ThreadScope team(threads);
+    with_law(law, [&](auto L) {
+      parallel_for((Index)list.size(), [&](Index q) { NonlinearGaussSeidel<d, decltype(L)>::row_update(P, x, list[q], omega); },
+                   kSerialColourRows);
+    });
   }
 
   // f - A u on `rows` (zero elsewhere)
@@ -196,8 +208,9 @@ void bind_local(py::module_& m) {
                        const std::string& law) { return new L(A, f, fixed, fixed_values, nodes, normals, gaps, coefficients, law); }),
            py::arg("A"), py::arg("f"), py::arg("fixed"), py::arg("fixed_values"), py::arg("contact_nodes"), py::arg("normals"),
            py::arg("gaps"), py::arg("coefficients"), py::arg("law"))
-      .def("sweep", &L::sweep, py::arg("u"), py::arg("rows"), py::arg("forward"), py::arg("omega") = 1.0,
-           "one nonlinear Gauss-Seidel pass over `rows` (in order, or reversed), u (n, d) in place")
+      .def("sweep", &L::sweep, py::arg("u"), py::arg("rows"), py::arg("forward"), py::arg("omega") = 1.0, py::arg("threads") = 1,
+           "one nonlinear Gauss-Seidel pass over `rows` (in order, or reversed), u (n, d) in place; threads > 1: "
+           "`rows` are one colour, updated on that many threads")
       .def("residual", &L::residual, py::arg("u"), py::arg("rows"), "f - A u on rows (zero elsewhere)")
       .def("linearize", &L::linearize, py::arg("u"), py::arg("r"), py::arg("contacts"),
            "(mask, lo, hi, hessian, bounded) at the given contact nodes; the friction gradient is added into r")
