@@ -47,6 +47,7 @@ class DistributedOptions:
     tol: float
     rtol: float
     max_cycles: int
+    threads: int = 1  # per rank: the rows of one colour on this many threads
 
 
 def resolve(options, cell_type: str) -> DistributedOptions:
@@ -64,7 +65,10 @@ def resolve(options, cell_type: str) -> DistributedOptions:
     omega = float(o.omega) if o.omega is not None else float(DEFAULT_OMEGA.get(cell_type, 1.0))
     post = float(o.omega_post) if o.omega_post is not None else omega
     tol, rtol = o.stop
-    return DistributedOptions(o.cycle, o.nu1, o.nu2, omega, post, tol, rtol, o.max_cycles)
+    # threads per rank: ranks usually take a core each, so one thread unless asked (0, the serial
+    # default "every core", would put every rank's threads on every core)
+    threads = int(o.threads) if o.threads > 0 else 1
+    return DistributedOptions(o.cycle, o.nu1, o.nu2, omega, post, tol, rtol, o.max_cycles, threads)
 
 
 @dataclass
