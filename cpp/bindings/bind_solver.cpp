@@ -170,8 +170,8 @@ void bind_dim(py::module_& m) {
            "options: a dict of SolverOptions fields (method, cycle, nu1, nu2, tol, rtol, max_cycles, omega, omega_post, "
            "fixed_point_tol, fixed_point_max, fixed_point_stall_window, linear, lines, threads, ordering, petrov_galerkin, "
            "upwind_contact_sweep, projected_coarse_correction; a missing key takes the core's default, an unknown key or a "
-           "bad value raises ValueError): the options every solve starts from. ordering 'coloured' also stores every "
-           "level but the coarsest by colours (each colour one contiguous range of rows, so a coloured sweep streams "
+           "bad value raises ValueError): the options every solve starts from. ordering 'coloured' or 'hashed' also stores every "
+           "level but the coarsest by its colours (each colour one contiguous range of rows, so a coloured sweep streams "
            "memory; inputs and outputs keep the caller's numbering). fixed/fixed_values: Dirichlet components in "
            "canonical axes (a contact node keeps its contact condition in its free directions); frame_fixed/frame_values "
            "(nc, d): components fixed in the contact frames; take_matrix: the solver takes A over (A is left empty)")

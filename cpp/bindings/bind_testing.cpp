@@ -63,6 +63,12 @@ void bind_dim(py::module_& m) {
              return lines_to_list(S.coarse_lines(l));
            }, py::arg("solver"), py::arg("level"), "the lines of coarse level `level` (node ids in chain order)");
   m.def("num_colours", &CS::num_fine_colours, "colours of the fine block graph (coloured sweeps)");
+  m.def("level_colours", [](CS& S, int level, const std::string& ordering) {
+             const std::vector<Index> c = S.level_colours(level, parse_ordering(ordering));
+             return to_numpy(c, {(py::ssize_t)c.size()});
+           }, py::arg("solver"), py::arg("level"), py::arg("ordering") = "hashed",
+           "the colour of every node of level `level` (0: coarsest; the fine level last) in the coloured or hashed "
+           "sweeps, in the user's numbering (-1: not smoothed)");
   m.def("coarsest_factorizations", [](const CS& S) { return S.hierarchy().coarsest_factorizations(); },
                              "factorizations of the coarsest-level matrix by this solver so far");
   m.def(("line_gauss_seidel_" + sfx).c_str(), [](const BM& A, DArr b, DArr x0, int sweeps, py::object active) {

@@ -32,17 +32,35 @@ class CoarseCycle {
     order.check(H_.prolongation(l).cols);
     order_.at(l) = std::move(order);
     coloured_.clear();
+    hashed_.clear();
   }
   // The orders of the coarse levels' sweeps for `o` (the coloured ones built on first use: the
   // coarse patterns are fixed once the hierarchy was first built).
   const std::vector<SweepOrder>& orders(Ordering o) {
     if (o == Ordering::Lexicographic) return order_;
+    if (o == Ordering::Hashed) {
+      if (!hashed_ready()) throw std::logic_error("the hashed coarse orders are not made (make_hashed)");
+      return hashed_;
+    }
     if (coloured_.empty()) {
       for (int l = 0; l < (int)order_.size(); ++l) coloured_.push_back(order_[l].coloured_by<d>(H_.matrix(l)));
       coarsest_all_ = SweepOrder().coloured_by<d>(H_.matrix(0));
     }
     return coloured_;
   }
+  // The hashed colourings of the coarse levels (sweep_order.hpp hashed_visit): number(l, k) is the
+  // node number of stored row k of level l that the priority hashes (the user's numbering, which
+  // the distributed solver's global ids equal). The coarsest level's projected sweeps stay
+  // lexicographic in this order, as the distributed solver's on its gathered coarsest level.
+  template <class Number>
+  void make_hashed(Number&& number) {
+    hashed_.clear();
+    for (int l = 0; l < (int)order_.size(); ++l) {
+      const BlockMatrix<d>& A = H_.matrix(l);
+      hashed_.push_back(order_[l].hashed_visit(A.rows, [&](Index k) { return number(l, k); }).template coloured_by<d>(A));
+    }
+  }
+  bool hashed_ready() const { return !hashed_.empty() || order_.empty(); }
   std::size_t memory_bytes() const {
     std::size_t s = 0;
     for (auto& L : lv_) s += sizeof(double) * 5 * L.x.size();
@@ -183,6 +201,7 @@ class CoarseCycle {
     if (!(e < 0)) x.setZero();
     double scale = 0;
     const SweepOrder lexicographic;
+    // (hashed: lexicographic, the gathered coarsest level's order in the distributed solver)
     const SweepOrder& all = opt.ordering == Ordering::Coloured ? coarsest_all_ : lexicographic;
     for (int s = 0; s < kCoarsestMaxSweeps; ++s) {
       L.r = L.x;
@@ -200,7 +219,7 @@ class CoarseCycle {
   Index serial_rows_ = 0;  // kSerialLevelRows in a correction (see cycle())
   bool serial_ = false;
   const GalerkinHierarchy<d>& H_;
-  std::vector<SweepOrder> order_, coloured_;
+  std::vector<SweepOrder> order_, coloured_, hashed_;
   SweepOrder coarsest_all_;                      // every row of the coarsest level, coloured
   const std::vector<SweepOrder>* cur_ = nullptr;  // the orders of the cycle under way
   bool lines_ = false;                            // line sweeps in the cycle under way

@@ -110,13 +110,14 @@ class Renumbering {
   // old_of_new[k]: the user's number of stored node k. Only this direction is kept (4 bytes a node).
   explicit Renumbering(const std::vector<Index>& old_of_new) : old_of_new_(old_of_new.begin(), old_of_new.end()) {}
   // The colour-major order of the greedy colouring of A's block graph (visiting the rows in the
-  // user's order: the colouring, and so the method, is the one it always was), each colour's rows
-  // in the locality order `local` (a permutation; the user's order when empty).
+  // user's order: the colouring, and so the method, is the one it always was; hashed: in the
+  // hashed order of the user's numbers, the distributed solver's colours), each colour's rows in
+  // the locality order `local` (a permutation; the user's order when empty).
   template <int d>
-  static Renumbering by_colours(const BlockMatrix<d>& A, const std::vector<Index>& local = {}) {
+  static Renumbering by_colours(const BlockMatrix<d>& A, const std::vector<Index>& local = {}, bool hashed = false) {
     std::vector<Index> rows(A.rows);
     for (Index i = 0; i < A.rows; ++i) rows[i] = i;
-    const SweepOrder S = SweepOrder(rows).coloured_by<d>(A);
+    const SweepOrder S = (hashed ? SweepOrder().hashed_visit(A.rows, [](Index i) { return i; }) : SweepOrder(rows)).template coloured_by<d>(A);
     if (!S.contiguous()) rows = S.rows();  // else the colour-major order is the identity
     if (!local.empty()) {
       const std::vector<Index> rank = rank_of(local);

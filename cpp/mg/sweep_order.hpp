@@ -1,10 +1,13 @@
 // Which rows of a level a Gauss-Seidel sweep visits, and in which order: every row or a subset
-// (the changed region of an adaptive hierarchy), lexicographic, or by colours of the block graph.
+// (the changed region of an adaptive hierarchy), lexicographic, or by colours of the block graph
+// (greedy in row order, or in the hashed order of the distributed solver: hashed_visit below).
 // In the coloured order no two rows of one colour are coupled, so the rows of a colour are
 // updated at once (threads); the colouring does not depend on the thread count, so neither does
 // the result.
 #pragma once
+#include <algorithm>
 #include "base/block_matrix.hpp"
+#include "base/hashed_priority.hpp"
 #include "base/parallel.hpp"
 #include "solver/solver_options.hpp"
 
@@ -18,6 +21,28 @@ class SweepOrder {
   bool all() const { return all_; }
   bool coloured() const { return !colour_ptr_.empty(); }
   const std::vector<Index>& rows() const { return rows_; }  // empty when all or contiguous
+  // The same rows in the hashed order of their node numbers (number(k): the number of stored row k,
+  // the user's one, which the distributed solver's global ids equal): coloured_by() on the result
+  // is the greedy colouring in that order, the colours of distributed/colouring.py.
+  template <class Number>
+  SweepOrder hashed_visit(Index n, Number&& number) const {
+    std::vector<Index> rows = rows_;
+    if (all_) {
+      rows.resize(n);
+      for (Index i = 0; i < n; ++i) rows[i] = i;
+    }
+    struct Key { std::uint64_t priority; Index number, row; };
+    std::vector<Key> key(rows.size());
+    for (std::size_t q = 0; q < rows.size(); ++q) {
+      const Index m = (Index)number(rows[q]);
+      key[q] = {hashed_priority(m), m, rows[q]};
+    }
+    std::sort(key.begin(), key.end(), [](const Key& a, const Key& b) {
+      return a.priority != b.priority ? a.priority > b.priority : a.number > b.number;
+    });
+    for (std::size_t q = 0; q < rows.size(); ++q) rows[q] = key[q].row;
+    return SweepOrder(std::move(rows));
+  }
   // Every colour a contiguous range of rows (a level stored by colours).
   bool contiguous() const { return contiguous_; }
   std::size_t memory_bytes() const { return sizeof(Index) * (rows_.size() + colour_ptr_.size()); }
@@ -26,7 +51,8 @@ class SweepOrder {
   const std::vector<Index>& colour_ptr() const { return colour_ptr_; }
 
   // The same rows by colours of the block graph of A: greedy, visiting the rows in their order
-  // and giving each the smallest colour none of its coupled rows has; rows ascending per colour.
+  // and giving each the smallest colour none of its coupled rows has (coupled rows outside the
+  // order are not coloured and constrain nothing); rows ascending per colour.
   template <int d>
   SweepOrder coloured_by(const BlockMatrix<d>& A) const {
     std::vector<Index> rows = rows_;

@@ -21,14 +21,14 @@ class ContactSolver {
   };
 
   // options: the solver's own options, the ones a solve starts from. Their ordering also decides
-  // the storage: coloured stores every level but the coarsest by colours (mg/renumbering.hpp); what
-  // goes in and out stays in the caller's numbering.
+  // the storage: coloured (hashed) stores every level but the coarsest by its colours (hashed
+  // colours; mg/renumbering.hpp); what goes in and out stays in the caller's numbering.
   ContactSolver(BlockMatrix<d> A, const double* f, const std::uint8_t* fixed, const double* fixed_values,
                 const std::vector<Index>& contact_nodes, const double* normals, const double* gaps, const double* coefficients,
                 Law law, std::vector<Transfer> transfers, const SolverOptions& options, const std::uint8_t* frame_fixed = nullptr,
                 const double* frame_values = nullptr)
       : ContactSolver(Stored(std::move(A), f, fixed, fixed_values, contact_nodes, std::move(transfers),
-                             validated(options).ordering == Ordering::Coloured),
+                             validated(options).ordering),
                       normals, gaps, coefficients, law, options, frame_fixed, frame_values) {}
 
   Index num_nodes() const { return P_.num_nodes(); }
@@ -58,7 +58,7 @@ class ContactSolver {
     // the problem (matrix, load, masks), coarse levels and prolongations, coarse vectors, the fine
     // iterate u, A u and the step's r, u_old (4 fine vectors and one mask), the orders
     std::size_t s = P_.memory_bytes() + H_.memory_bytes() + C_.memory_bytes() + (sizeof(double) * 4 + 1) * P_.num_nodes() * d +
-                    fine_coloured_.memory_bytes() + lexicographic_.memory_bytes();
+                    fine_coloured_.memory_bytes() + fine_hashed_.memory_bytes() + lexicographic_.memory_bytes();
     for (const Renumbering& R : order_) s += R.memory_bytes();
     if (fine_cycle_) s += fine_cycle_->memory_bytes();
     if (tied_) s += tied_->memory_bytes();
@@ -88,6 +88,20 @@ class ContactSolver {
     return old;
   }
   Index num_fine_colours() { return fine_order(Ordering::Coloured).num_colours(); }
+  // The colour of every node of level `level` (coarsest 0, the fine level last) in the coloured
+  // or hashed sweeps, in the user's numbering (-1: a row not smoothed). For tests.
+  std::vector<Index> level_colours(int level, Ordering o) {
+    if (o == Ordering::Lexicographic) throw InputError("level colours: lexicographic sweeps have no colours");
+    if (level < 0 || level >= (int)order_.size()) throw InputError("level colours: no level " + std::to_string(level));
+    const bool fine = level + 1 == (int)order_.size();
+    const SweepOrder& S = fine ? fine_order(o) : (prepare_orders(o), C_.orders(o)[level]);
+    const Index n = fine ? num_nodes() : H_.matrix(level).rows;
+    std::vector<Index> colour(n, -1);
+    const std::vector<Index>& ptr = S.colour_ptr();
+    for (Index c = 0; c < S.num_colours(); ++c)
+      for (Index q = ptr[c]; q < ptr[c + 1]; ++q) colour[order_[level].to_user(S.contiguous() ? q : S.rows()[q])] = c;
+    return colour;
+  }
   // A second, bounds-free coarse correction with every contact dof frozen after each coarse
   // correction of the nmg and fixed-point methods (steps/tied_correction.hpp; two bodies).
   void enable_tied_correction() {
@@ -118,6 +132,7 @@ class ContactSolver {
   std::vector<double> linear_solve(const double* r, const SolverOptions& cyc, int max_iterations, double reduction,
                                    std::vector<double>& energies) {
     TruncatedLinearCycle<d>& lin = fine_cycle();
+    prepare_orders(cyc.ordering);
     lin.set_linearization(built_.mask.data(), built_.hessian, cyc.lines);
     const Index n = P_.num_nodes() * d;
     const std::vector<double> rs = order_.back().to_storage(r, num_nodes(), d);  // r: user numbering
@@ -238,8 +253,9 @@ class ContactSolver {
     std::vector<Renumbering> order;  // per level, coarsest first; the fine one last
 
     Stored(BlockMatrix<d> A_in, const double* f_in, const std::uint8_t* fixed_in, const double* values_in,
-           const std::vector<Index>& nodes, std::vector<Transfer> T, bool renumber)
+           const std::vector<Index>& nodes, std::vector<Transfer> T, Ordering storage)
         : A(std::move(A_in)) {
+      const bool renumber = storage != Ordering::Lexicographic, hashed = storage == Ordering::Hashed;
       const Index n = A.rows;
       for (std::size_t l = 0; l < T.size(); ++l) {
         const bool fine = l + 1 == T.size();
@@ -259,16 +275,19 @@ class ContactSolver {
         // each colour stored in the level's locality order (mg/renumbering.hpp); rank: the locality
         // position of each stored row of the level just renumbered
         std::vector<Index> locality = reverse_cuthill_mckee<d>(A), rank;
-        order.back() = Renumbering::by_colours<d>(A, locality);
+        order.back() = Renumbering::by_colours<d>(A, locality, hashed);
         rank = stored_rank(locality, order.back());
         order.back().permute_matrix(A);
         if (!P.empty()) order.back().permute_rows(P.back());
         // each coarse level (not the coarsest: it is factorized) by the colours of its Galerkin pattern
+        // (on the uniform hierarchies of the distributed solver the coarse mesh's cell adjacency,
+        // the graph its hashed colouring runs on: coarse nodes i, j share a coarse cell exactly when
+        // a fine node below i is coupled to one below j)
         BlockMatrix<d> pattern;
         for (int l = (int)P.size() - 1; l >= 1; --l) {
           pattern = galerkin_pattern<d>(l + 1 == (int)P.size() ? A : pattern, P[l], TransposedPattern<d>(P[l]));
           locality = induced_locality_order(P[l], rank);  // P[l]'s rows: stored, its columns: the user's
-          order[l] = Renumbering::by_colours<d>(pattern, locality);
+          order[l] = Renumbering::by_colours<d>(pattern, locality, hashed);
           rank = stored_rank(locality, order[l]);
           order[l].permute_matrix(pattern);
           order[l].permute_columns(P[l]);
@@ -329,16 +348,29 @@ class ContactSolver {
     return *fine_cycle_;
   }
 
-  // The order of the fine nonlinear sweeps (the colouring made once, on first use).
+  // The order of the fine nonlinear sweeps (the colouring made once, on first use). Hashed: the
+  // coarse levels' hashed colourings are made here too (by the user's numbers of their rows).
   const SweepOrder& fine_order(Ordering o) {
     const Renumbering& fine = order_.back();
     if (o == Ordering::Lexicographic) {
       if (!fine.identity() && lexicographic_.all()) lexicographic_ = SweepOrder(fine.new_of_old());
       return lexicographic_;
     }
+    if (o == Ordering::Hashed) {
+      prepare_orders(o);
+      if (!fine_hashed_.coloured())
+        fine_hashed_ = SweepOrder().hashed_visit(num_nodes(), [&](Index k) { return fine.to_user(k); }).template coloured_by<d>(P_.matrix());
+      return fine_hashed_;
+    }
     if (!fine_coloured_.coloured())
       fine_coloured_ = (fine.identity() ? SweepOrder() : SweepOrder(fine.new_of_old())).coloured_by<d>(P_.matrix());
     return fine_coloured_;
+  }
+
+  // The coarse levels' orders for a cycle in order o: the hashed ones need the user's numbers.
+  void prepare_orders(Ordering o) {
+    if (o == Ordering::Hashed && !C_.hashed_ready())
+      C_.make_hashed([&](int l, Index k) { return order_[l].to_user(k); });
   }
 
   // The reference displacement (the caller's numbering) in storage order.
@@ -420,7 +452,7 @@ class ContactSolver {
   bool keep_work_ = true;  // off for a solver made for one solve: then the step's vectors go before the result is written
   Monitor mon_;
   std::vector<Renumbering> order_;  // storage order of each level (coarsest first, fine last)
-  SweepOrder lexicographic_, fine_coloured_;
+  SweepOrder lexicographic_, fine_coloured_, fine_hashed_;
   std::unique_ptr<TruncatedLinearCycle<d>> fine_cycle_;
   std::unique_ptr<TiedCorrection<d>> tied_;
   std::vector<double> reference_;  // a solve's reference displacement in storage order

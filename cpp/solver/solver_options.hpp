@@ -15,8 +15,9 @@ namespace cmg {
 enum class Method : int { Nmg = 0, Tnnmg = 1, FixedPoint = 2 };
 enum class CycleType : int { V = 0, W = 1, F = 2 };
 // The order of every Gauss-Seidel sweep: lexicographic, or by colours of the block graph (the rows
-// of one colour at once, on all threads).
-enum class Ordering : int { Lexicographic = 0, Coloured = 1 };
+// of one colour at once, on all threads): coloured greedily in row order (Coloured) or in the hashed
+// order of the node numbers (Hashed: the distributed solver's colours, base/hashed_priority.hpp).
+enum class Ordering : int { Lexicographic = 0, Coloured = 1, Hashed = 2 };
 // The linear correction of a TNNMG step (steps/tnnmg_step.hpp): the coarse cycle alone (the fine
 // level smoothed only by the nonlinear sweeps), one truncated linear cycle on the fine level
 // (mg/truncated_linear_cycle.hpp), or PCG preconditioned by that cycle (mg/pcg.hpp).
@@ -41,9 +42,12 @@ inline const char* cycle_name(CycleType t) { return t == CycleType::V ? "V" : t 
 inline Ordering parse_ordering(const std::string& s) {
   if (s == "lexicographic") return Ordering::Lexicographic;
   if (s == "coloured" || s == "colored") return Ordering::Coloured;
-  throw InputError("ordering: unknown ordering '" + s + "' (expected lexicographic or coloured)");
+  if (s == "hashed") return Ordering::Hashed;
+  throw InputError("ordering: unknown ordering '" + s + "' (expected lexicographic, coloured or hashed)");
 }
-inline const char* ordering_name(Ordering o) { return o == Ordering::Coloured ? "coloured" : "lexicographic"; }
+inline const char* ordering_name(Ordering o) {
+  return o == Ordering::Coloured ? "coloured" : o == Ordering::Hashed ? "hashed" : "lexicographic";
+}
 inline LinearCorrection parse_linear_correction(const std::string& s) {
   if (s == "coarse") return LinearCorrection::Coarse;
   if (s == "cycle") return LinearCorrection::Cycle;

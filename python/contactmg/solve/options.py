@@ -12,7 +12,7 @@ import numpy as np
 
 METHODS = ("nmg", "fixed-point", "linear", "tnnmg")
 CYCLES = ("V", "W", "F")
-ORDERINGS = ("coloured", "lexicographic")
+ORDERINGS = ("coloured", "lexicographic", "hashed")
 LINEAR_CORRECTIONS = ("pcg", "cycle", "coarse")
 INT32_MAX = 2 ** 31 - 1  # the core counts cycles in a C int
 
@@ -80,9 +80,14 @@ class SolverOptions:
     threads: int = 0
     """Threads of sweeps, products and norms (0: all cores); results are bitwise the same on any count."""
     ordering: Optional[str] = None
-    """Gauss-Seidel order: "coloured" or "lexicographic" (None: coloured). The solver is built for its
-    options' ordering (coloured: the levels stored by colours, 0003-coloured-gauss-seidel); a solve
-    may take the other order on it (the same answer, slower)."""
+    """Gauss-Seidel order: "coloured", "lexicographic" or "hashed" (None: coloured). "coloured"
+    colours each level greedily in node order; "hashed" greedily in the order of a hash of the node
+    numbers (splitmix64, ties by number), the colours of the distributed solver
+    (contactmg.distributed.colour_level) on every smoothed level, so that a serial solve sweeps the
+    nodes as a distributed one does and takes the same cycles (0030-distributed-cycle). The solver is
+    built for its options' ordering (coloured, hashed: the levels stored by those colours,
+    0003-coloured-gauss-seidel); a solve may take another order on it (the same answer as a solver
+    built for that order up to round-off, slower)."""
     local_smoothing: Optional[bool] = None
     """Coarse levels smooth only where they differ from the level below (fixed when the solver is
     built); None: on for adaptive hierarchies (0004-local-smoothing)."""
