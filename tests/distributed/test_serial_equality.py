@@ -10,7 +10,7 @@ from contactmg.distributed import SerialComm, colour_level
 from contactmg.examples.distributed import hertz, sphere
 from contactmg.examples.hertz import hertz_problem
 from contactmg.examples.sphere import sphere_problem
-from contactmg.model.friction import Tresca
+from contactmg.model.friction import Frictionless
 from contactmg.model.problem import Problem
 
 from solve_checks import CASES, OPTIONS, solve_case
@@ -21,12 +21,10 @@ from solve_checks import CASES, OPTIONS, solve_case
 RELATIVE = 1e-12
 
 
-def serial_problem(example, levels, cell, bound):
+def serial_problem(example, levels, cell, friction):
     make = hertz_problem if example is hertz else sphere_problem
     p = make(cell, levels, 0.0)
-    if bound > 0:
-        p = Problem(p.bodies[0], obstacle=p.obstacle, friction=Tresca(bound))
-    return p
+    return p if isinstance(friction, Frictionless) else Problem(p.bodies[0], obstacle=p.obstacle, friction=friction)
 
 
 @pytest.mark.parametrize("example, levels, cell", [(hertz, 3, "triangle"), (hertz, 3, "quad"), (sphere, 2, "tetra"),
@@ -36,8 +34,8 @@ def test_hashed_colours_are_the_distributed_colours(example, levels, cell, stora
     """Every level's colours (fine, coarse and coarsest) of the serial hashed sweeps are colour_level's
     for the same nodes, whether the levels are stored by the hashed colours or the coloured ones."""
     comm = SerialComm()
-    dist = example(levels, cell, 0.0, comm)
-    solver = contactmg.Solver(serial_problem(example, levels, cell, 0.0), OPTIONS.replace(method="nmg", ordering=storage))
+    dist = example(levels, cell, None, comm)
+    solver = contactmg.Solver(serial_problem(example, levels, cell, Frictionless()), OPTIONS.replace(method="nmg", ordering=storage))
     assert list(solver.core.level_sizes) == [len(lev.gid) for lev in dist.hierarchy.levels]
     for l, lev in enumerate(dist.hierarchy.levels):
         got = _core.testing.level_colours(solver.core, l, "hashed")
@@ -51,9 +49,9 @@ def test_hashed_colours_are_the_distributed_colours(example, levels, cell, stora
 
 @pytest.mark.parametrize("name", sorted(CASES))
 def test_hashed_serial_solve_is_the_distributed_solve(name):
-    example, levels, cell, bound, _ = CASES[name]
+    example, levels, cell, friction, _ = CASES[name]
     got = solve_case(name, SerialComm())
-    ref = contactmg.Solver(serial_problem(example, levels, cell, bound), OPTIONS.replace(method="nmg", ordering="hashed")).solve()
+    ref = contactmg.Solver(serial_problem(example, levels, cell, friction), OPTIONS.replace(method="nmg", ordering="hashed")).solve()
     assert got["converged"] and ref.converged
     assert got["cycles"] == ref.cycles
     u = ref.displacement
