@@ -10,6 +10,8 @@
 #include <cmath>
 #include <cstring>
 #include <memory>
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
 #include "mg/level_smoothers.hpp"
 #include "mg/sweep_order.hpp"
 
@@ -441,6 +443,69 @@ class DistributedTransfer {
   std::vector<Index> hess_nodes_;
   std::vector<double> hess_;
   bool owned_pattern_done_ = false, ghost_pattern_done_ = false;
+};
+
+// The coarsest level gathered onto every rank (the same matrix everywhere), factorized by the
+// core's sparse LDL^T: one thread and a fixed (AMD) ordering, so every rank solves with the same
+// bits. SuperLU took 60 ms a factorization on the half ball's coarsest level, most of a rebuild once
+// the Galerkin rows were in C++. The rule is the serial GalerkinHierarchy::factorize's
+// (mg/hierarchy.hpp): each pivot against its own row's diagonal entry, and a matrix that only
+// semi-definite truncation through rotated frames leaves singular is shifted by 1e-10 diag.
+class GatheredCoarsestFactor {
+ public:
+  using SpMat = Eigen::SparseMatrix<double>;
+
+  // S: scalar CSR (n x n, symmetric; its lower triangle is read) with the rows and columns of the
+  // inert dofs (per dof, nonzero: inert) replaced by identity rows, as the serial hierarchy does.
+  GatheredCoarsestFactor(Index n, const Index* indptr, const Index* indices, const double* values, const std::uint8_t* inert) {
+    std::vector<Eigen::Triplet<double>> t;
+    t.reserve(indptr[n] / 2 + n);
+    for (Index i = 0; i < n; ++i) {
+      if (inert[i]) { t.emplace_back(i, i, 1.0); continue; }
+      for (Index k = indptr[i]; k < indptr[i + 1]; ++k) {
+        const Index j = indices[k];
+        if (j < 0 || j >= n) throw InputError("a coarsest-level column is out of range");
+        if (j <= i && values[k] != 0 && !inert[j]) t.emplace_back(i, j, values[k]);
+      }
+    }
+    SpMat S(n, n);
+    S.setFromTriplets(t.begin(), t.end());
+    const Eigen::VectorXd diag = S.diagonal();
+    ldlt_.compute(S);  // Lower: the triangle S holds
+    if (ok(diag)) return;
+    for (Index k = 0; k < n; ++k) S.coeffRef(k, k) *= 1 + 1e-10;
+    ldlt_.compute(S);
+    shifted_ = true;
+    if (!ok(diag)) throw InputError("the coarsest-level matrix is singular: is rigid-body motion left free by the Dirichlet conditions?");
+  }
+
+  Index n() const { return ldlt_.rows(); }
+  bool shifted() const { return shifted_; }
+
+  void solve(const double* b, double* x) const {
+    Eigen::Map<const Eigen::VectorXd> bv(b, n());
+    Eigen::Map<Eigen::VectorXd> xv(x, n());
+    xv = ldlt_.solve(bv);
+  }
+
+  // the factor's entries (a value and a row index each), column pointers, D and the permutations
+  std::size_t bytes() const {
+    const auto& L = ldlt_.matrixL().nestedExpression();
+    return L.nonZeros() * (sizeof(double) + sizeof(int)) + (L.cols() + 1) * sizeof(int) + n() * (sizeof(double) + 2 * sizeof(int));
+  }
+
+ private:
+  bool ok(const Eigen::VectorXd& diag) const {
+    if (ldlt_.info() != Eigen::Success) return false;
+    const auto D = ldlt_.vectorD();
+    const auto& to = ldlt_.permutationP().indices();  // row i of S is row to[i] of the factor
+    for (Index i = 0; i < (Index)diag.size(); ++i)
+      if (!(D[to[i]] > 1e-13 * diag[i])) return false;
+    return true;
+  }
+
+  Eigen::SimplicialLDLT<SpMat> ldlt_;
+  bool shifted_ = false;
 };
 
 }  // namespace cmg

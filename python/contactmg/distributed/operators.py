@@ -180,29 +180,32 @@ def to_block_matrix(M: sp.csr_matrix, d: int):
 
 class GatheredCoarsest:
     """The coarsest level on every rank: its owned rows gathered (global node order), factored once
-    per matrix (SuperLU: one thread, the same bits everywhere), solved redundantly. Inert dofs (a
-    zero diagonal: every fine dof below truncated) get identity rows and stay zero."""
+    per matrix (the core's sparse LDL^T: one thread, the same bits everywhere), solved redundantly.
+    Inert dofs (a zero diagonal: every fine dof below truncated) get identity rows and stay zero."""
 
     def __init__(self, comm, level, A_owned_rows: sp.csr_matrix, d: int):
         self.comm, self.level, self.d = comm, level, d
         n = level.num_global_nodes
         gid = level.gid
-        coo = A_owned_rows.tocoo()
-        rows = gid[coo.row // d] * d + coo.row % d
-        cols = gid[coo.col // d] * d + coo.col % d
-        parts = [(rows, cols, coo.data)] if is_serial(comm) else comm.allgather((rows, cols, coo.data))
-        r = np.concatenate([p[0] for p in parts])
-        c = np.concatenate([p[1] for p in parts])
-        v = np.concatenate([p[2] for p in parts])
-        order = np.lexsort((c, r))
-        self.A = sorted_csr(sp.csr_matrix((v[order], (r[order], c[order])), shape=(n * d, n * d)))
+        if is_serial(comm) and np.array_equal(gid, np.arange(n)):
+            self.A = A_owned_rows  # one rank: its local nodes are the global ones, in order
+        else:
+            coo = A_owned_rows.tocoo()
+            rows = gid[coo.row // d] * d + coo.row % d
+            cols = gid[coo.col // d] * d + coo.col % d
+            parts = comm.allgather((rows, cols, coo.data))
+            r = np.concatenate([p[0] for p in parts])
+            c = np.concatenate([p[1] for p in parts])
+            v = np.concatenate([p[2] for p in parts])
+            order = np.lexsort((c, r))
+            self.A = sorted_csr(sp.csr_matrix((v[order], (r[order], c[order])), shape=(n * d, n * d)))
         diag = self.A.diagonal()
         scale = float(diag.max()) if len(diag) else 0.0
         self.inert = diag <= 1e-12 * scale
-        keep = (~self.inert).astype(float)
-        S = sp.diags(keep) @ self.A @ sp.diags(keep) + sp.diags(self.inert.astype(float))
-        from scipy.sparse.linalg import splu
-        self.lu = splu(sp.csc_matrix(S))
+        from .. import _core
+        A = self.A
+        self.factor = _core.GatheredCoarsestFactor(A.indptr.astype(np.int64), A.indices.astype(np.int64), A.data,
+                                                   self.inert.astype(np.uint8))
         self.scale = scale
 
     def gather(self, x_local: np.ndarray) -> np.ndarray:
@@ -229,13 +232,12 @@ class GatheredCoarsest:
         self._smoother.sweep(x, b, self._rows, forward, omega, lo, hi, bounded)
 
     def memory_bytes(self) -> int:
-        """The gathered matrix and its factors (a value and a row index an entry, and the permutations)."""
+        """The gathered matrix and its factor."""
         A = self.A
         total = A.data.nbytes + A.indices.nbytes + A.indptr.nbytes
-        total += (self.lu.L.nnz + self.lu.U.nnz) * 12 + 2 * self.lu.perm_r.nbytes
-        return int(total)
+        return int(total + self.factor.memory_bytes())
 
     def solve(self, b_global: np.ndarray) -> np.ndarray:
         """The exact solution for the global right-hand side (inert dofs zero)."""
         b = np.where(self.inert, 0.0, b_global)
-        return self.lu.solve(b)
+        return self.factor.solve(b)
