@@ -59,8 +59,11 @@ class CoarseLevel:
         self.n = len(level.gid)
         self.owned = level.owner == level.rank
         self.owned_u8 = self.owned.astype(np.uint8)
-        self.halo = level.halo
+        self.halo = None if is_serial(comm) else level.halo  # one rank: no ghosts, nothing to exchange
         self.colours = _colour_rows(comm, level)
+        # without exchanges between the colours a pass is one call over the colours in turn: the same
+        # rows in the same order (reversed backward), without a call per colour
+        self.order = None if self.halo is not None else np.concatenate(self.colours or [np.zeros(0, np.int64)])
         self.rows = (_core.CoarseRows2D if d == 2 else _core.CoarseRows3D)()
         self.transfer = None  # from the level below
         if below is not None:
@@ -106,7 +109,10 @@ class CoarseLevel:
 
     def sweep(self, forward: bool, omega: float) -> None:
         """One (projected) Gauss-Seidel pass, colour by colour, the ghosts exchanged after each."""
-        order = self.colours if forward else self.colours[::-1]
+        if self.order is not None:
+            order = [self.order]
+        else:
+            order = self.colours if forward else self.colours[::-1]
         for rows in order:
             if self.any_bounds:
                 self.rows.sweep(self.x, self.b, rows, forward, omega, self.lo, self.hi, self.bounded)
