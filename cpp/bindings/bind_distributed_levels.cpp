@@ -171,19 +171,23 @@ void bind_levels(py::module_& m) {
 void bind_distributed_levels(py::module_& m) {
   using F = GatheredCoarsestFactor;
   py::class_<F, std::shared_ptr<F>>(m, "GatheredCoarsestFactor",
-                                    "The gathered coarsest level's sparse LDL^T (one thread, the same bits on every rank)")
-      .def(py::init([](const IArr& indptr, const IArr& indices, const DArr& data, const BArr& inert) {
+                                    "The gathered coarsest level's sparse LDL^T with the serial solver's low-rank updates "
+                                    "(one thread, the same bits on every rank)")
+      .def(py::init<>())
+      .def("set", [](F& f, const IArr& indptr, const IArr& indices, const DArr& data, const BArr& inert, bool may_update) {
              const Index n = (Index)indptr.size() - 1;
              if (n < 0 || indices.size() != data.size() || indptr.data()[n] != (Index)indices.size())
                throw InputError("indptr, indices and data are not one CSR matrix");
              const std::vector<std::uint8_t> in = flags(inert, n, "inert");
              py::gil_scoped_release free;
-             return std::make_shared<F>(n, indptr.data(), indices.data(), data.data(), in.data());
-           }), py::arg("indptr"), py::arg("indices"), py::arg("data"), py::arg("inert"),
-           "from a symmetric scalar CSR matrix (its lower triangle), the inert dofs' rows and columns made identity")
-      .def_property_readonly("shifted", &F::shifted, "whether the matrix was semi-definite and solved shifted by 1e-10 diag")
+             f.set(n, indptr.data(), indices.data(), data.data(), in.data(), may_update);
+           }, py::arg("indptr"), py::arg("indices"), py::arg("data"), py::arg("inert"), py::arg("may_update"),
+           "the matrix to solve with (symmetric scalar CSR; the inert dofs' rows and columns made identity); "
+           "may_update: a low-rank correction of the kept factorization is allowed")
+      .def_property_readonly("shifted", &F::shifted, "whether the matrix was semi-definite and factorized shifted by 1e-10 diag")
+      .def_property_readonly("factorizations", &F::factorizations)
       .def("memory_bytes", &F::bytes)
-      .def("solve", [](const F& f, const DArr& b) {
+      .def("solve", [](F& f, const DArr& b) {
              if (b.size() != f.n()) throw InputError("b has " + std::to_string(b.size()) + " entries, " + std::to_string(f.n()) + " expected");
              py::array_t<double> x(f.n());
              f.solve(b.data(), x.mutable_data());

@@ -10,8 +10,7 @@
 #include <cmath>
 #include <cstring>
 #include <memory>
-#include <Eigen/SparseCholesky>
-#include <Eigen/SparseCore>
+#include "mg/coarsest_solver.hpp"
 #include "mg/level_smoothers.hpp"
 #include "mg/sweep_order.hpp"
 
@@ -446,65 +445,77 @@ class DistributedTransfer {
 };
 
 // The coarsest level gathered onto every rank (the same matrix everywhere), factorized by the
-// core's sparse LDL^T: one thread and a fixed (AMD) ordering, so every rank solves with the same
-// bits. SuperLU took 60 ms a factorization on the half ball's coarsest level, most of a rebuild once
-// the Galerkin rows were in C++. The rule is the serial GalerkinHierarchy::factorize's
-// (mg/hierarchy.hpp): each pivot against its own row's diagonal entry, and a matrix that only
-// semi-definite truncation through rotated frames leaves singular is shifted by 1e-10 diag.
+// core's sparse LDL^T and kept current across rebuilds by the serial solver's low-rank correction
+// (mg/coarsest_solver.hpp). SuperLU took 60 ms a factorization on the half ball's coarsest level
+// (2,286 dofs), most of a rebuild once the Galerkin rows were in C++. Every step here is serial and
+// in a fixed order, and every rank sees the same sequence of matrices: the solutions have the same
+// bits on every rank (they depend on that sequence, as the serial solver's do). The factorization
+// rule is the serial GalerkinHierarchy::factorize's (mg/hierarchy.hpp): each pivot against its own
+// row's diagonal entry, and a matrix that truncation through rotated frames leaves semi-definite is
+// shifted by 1e-10 diag.
 class GatheredCoarsestFactor {
  public:
   using SpMat = Eigen::SparseMatrix<double>;
+  using LDLT = Eigen::SimplicialLDLT<SpMat>;
 
-  // S: scalar CSR (n x n, symmetric; its lower triangle is read) with the rows and columns of the
-  // inert dofs (per dof, nonzero: inert) replaced by identity rows, as the serial hierarchy does.
-  GatheredCoarsestFactor(Index n, const Index* indptr, const Index* indices, const double* values, const std::uint8_t* inert) {
+  // S: scalar CSR (n x n, symmetric to round-off), the rows and columns of the inert dofs (per dof,
+  // nonzero: inert) replaced by identity rows, as the serial hierarchy does. may_update: a low-rank
+  // correction of the kept factorization is allowed (false: factorize).
+  void set(Index n, const Index* indptr, const Index* indices, const double* values, const std::uint8_t* inert, bool may_update) {
     std::vector<Eigen::Triplet<double>> t;
-    t.reserve(indptr[n] / 2 + n);
+    t.reserve(indptr[n] + n);
     for (Index i = 0; i < n; ++i) {
       if (inert[i]) { t.emplace_back(i, i, 1.0); continue; }
       for (Index k = indptr[i]; k < indptr[i + 1]; ++k) {
         const Index j = indices[k];
         if (j < 0 || j >= n) throw InputError("a coarsest-level column is out of range");
-        if (j <= i && values[k] != 0 && !inert[j]) t.emplace_back(i, j, values[k]);
+        if (values[k] != 0 && !inert[j]) t.emplace_back(i, j, values[k]);
       }
     }
     SpMat S(n, n);
     S.setFromTriplets(t.begin(), t.end());
-    const Eigen::VectorXd diag = S.diagonal();
-    ldlt_.compute(S);  // Lower: the triangle S holds
-    if (ok(diag)) return;
-    for (Index k = 0; k < n; ++k) S.coeffRef(k, k) *= 1 + 1e-10;
-    ldlt_.compute(S);
-    shifted_ = true;
-    if (!ok(diag)) throw InputError("the coarsest-level matrix is singular: is rigid-body motion left free by the Dirichlet conditions?");
+    n_ = n;
+    solver_.set(std::move(S), may_update, [&](SpMat& M, LDLT& f) { return factorize(M, f); });
   }
 
-  Index n() const { return ldlt_.rows(); }
+  Index n() const { return n_; }
   bool shifted() const { return shifted_; }
+  int factorizations() const { return solver_.factorizations(); }
 
-  void solve(const double* b, double* x) const {
-    Eigen::Map<const Eigen::VectorXd> bv(b, n());
-    Eigen::Map<Eigen::VectorXd> xv(x, n());
-    xv = ldlt_.solve(bv);
+  void solve(const double* b, double* x) {
+    solver_.solve(b, x, [&](SpMat& M, LDLT& f) { return factorize(M, f); });
   }
 
-  // the factor's entries (a value and a row index each), column pointers, D and the permutations
-  std::size_t bytes() const {
-    const auto& L = ldlt_.matrixL().nestedExpression();
-    return L.nonZeros() * (sizeof(double) + sizeof(int)) + (L.cols() + 1) * sizeof(int) + n() * (sizeof(double) + 2 * sizeof(int));
-  }
+  // the kept matrices and low-rank columns, and the factor (a value and a row index an entry)
+  std::size_t bytes() const { return solver_.memory_bytes() + factor_entries_ * (sizeof(double) + sizeof(int)) + n_ * 3 * sizeof(double); }
 
  private:
-  bool ok(const Eigen::VectorXd& diag) const {
-    if (ldlt_.info() != Eigen::Success) return false;
-    const auto D = ldlt_.vectorD();
-    const auto& to = ldlt_.permutationP().indices();  // row i of S is row to[i] of the factor
+  int factorize(SpMat& S, LDLT& f) {
+    const Eigen::VectorXd diag = S.diagonal();
+    f.compute(S);  // its lower triangle
+    shifted_ = false;
+    if (!ok(f, diag)) {
+      for (Index k = 0; k < S.rows(); ++k) S.coeffRef(k, k) *= 1 + 1e-10;
+      f.compute(S);
+      shifted_ = true;
+      if (!ok(f, diag)) throw InputError("the coarsest-level matrix is singular: is rigid-body motion left free by the Dirichlet conditions?");
+    }
+    factor_entries_ = (std::size_t)f.matrixL().nestedExpression().nonZeros();
+    return shifted_ ? 2 : 1;
+  }
+
+  static bool ok(const LDLT& f, const Eigen::VectorXd& diag) {
+    if (f.info() != Eigen::Success) return false;
+    const auto D = f.vectorD();
+    const auto& to = f.permutationP().indices();  // row i of S is row to[i] of the factor
     for (Index i = 0; i < (Index)diag.size(); ++i)
       if (!(D[to[i]] > 1e-13 * diag[i])) return false;
     return true;
   }
 
-  Eigen::SimplicialLDLT<SpMat> ldlt_;
+  CoarsestSolver solver_;
+  Index n_ = 0;
+  std::size_t factor_entries_ = 0;
   bool shifted_ = false;
 };
 

@@ -162,8 +162,11 @@ class CoarseCorrection:
             galerkin_rows(self.comm, L.level, below.level, L.transfer, below.rows, d, above=L.rows)
             below.refresh()
         L0 = self.levels[0]
-        if self.coarsest is None or _any(self.comm, L0.rows.changed.any()):
-            self.coarsest = GatheredCoarsest(self.comm, L0.level, rows_to_csr(L0.rows, d), d)
+        if self.coarsest is None:
+            self.coarsest = GatheredCoarsest(self.comm, L0.level, d)
+            self.coarsest.set_matrix(rows_to_csr(L0.rows, d))
+        elif _any(self.comm, L0.rows.changed.any()):
+            self.coarsest.set_matrix(rows_to_csr(L0.rows, d))
 
     def memory_bytes(self) -> int:
         """The bytes of the coarse levels (rows, smoother, vectors), the transfers with the Galerkin

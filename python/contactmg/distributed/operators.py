@@ -179,16 +179,25 @@ def to_block_matrix(M: sp.csr_matrix, d: int):
 
 
 class GatheredCoarsest:
-    """The coarsest level on every rank: its owned rows gathered (global node order), factored once
-    per matrix (the core's sparse LDL^T: one thread, the same bits everywhere), solved redundantly.
+    """The coarsest level on every rank: its owned rows gathered (global node order), factored by the
+    core's sparse LDL^T and kept current across rebuilds by low-rank corrections (one thread, the
+    same matrices in the same sequence on every rank: the same bits everywhere), solved redundantly.
     Inert dofs (a zero diagonal: every fine dof below truncated) get identity rows and stay zero."""
 
-    def __init__(self, comm, level, A_owned_rows: sp.csr_matrix, d: int):
+    def __init__(self, comm, level, d: int):
+        from .. import _core
         self.comm, self.level, self.d = comm, level, d
+        self.factor = _core.GatheredCoarsestFactor()
+        self.A = None
+        self._smoother = None  # the projected sweeps' (made when first needed, per matrix)
+
+    def set_matrix(self, A_owned_rows: sp.csr_matrix) -> None:
+        """The level's matrix from every rank's owned rows (collective)."""
+        comm, level, d = self.comm, self.level, self.d
         n = level.num_global_nodes
         gid = level.gid
         if is_serial(comm) and np.array_equal(gid, np.arange(n)):
-            self.A = A_owned_rows  # one rank: its local nodes are the global ones, in order
+            A = A_owned_rows  # one rank: its local nodes are the global ones, in order
         else:
             coo = A_owned_rows.tocoo()
             rows = gid[coo.row // d] * d + coo.row % d
@@ -198,15 +207,15 @@ class GatheredCoarsest:
             c = np.concatenate([p[1] for p in parts])
             v = np.concatenate([p[2] for p in parts])
             order = np.lexsort((c, r))
-            self.A = sorted_csr(sp.csr_matrix((v[order], (r[order], c[order])), shape=(n * d, n * d)))
-        diag = self.A.diagonal()
-        scale = float(diag.max()) if len(diag) else 0.0
-        self.inert = diag <= 1e-12 * scale
-        from .. import _core
-        A = self.A
-        self.factor = _core.GatheredCoarsestFactor(A.indptr.astype(np.int64), A.indices.astype(np.int64), A.data,
-                                                   self.inert.astype(np.uint8))
-        self.scale = scale
+            A = sorted_csr(sp.csr_matrix((v[order], (r[order], c[order])), shape=(n * d, n * d)))
+        first = self.A is None
+        self.A = A
+        diag = A.diagonal()
+        self.scale = float(diag.max()) if len(diag) else 0.0
+        self.inert = diag <= 1e-12 * self.scale
+        self.factor.set(A.indptr.astype(np.int64), A.indices.astype(np.int64), A.data, self.inert.astype(np.uint8),
+                        not first)
+        self._smoother = None
 
     def gather(self, x_local: np.ndarray) -> np.ndarray:
         """The global vector (n * d) from the owned entries of every rank."""
@@ -223,7 +232,7 @@ class GatheredCoarsest:
                         omega: float) -> None:
         """One projected Gauss-Seidel pass over every row (global order), x (n, d) in place."""
         d = self.d
-        if not hasattr(self, "_smoother"):
+        if self._smoother is None:
             from .. import _core
             cls = _core.LocalLevelSmoother2D if d == 2 else _core.LocalLevelSmoother3D
             self._smoother = cls(to_block_matrix(self.A, d), self.scale)
@@ -234,7 +243,7 @@ class GatheredCoarsest:
     def memory_bytes(self) -> int:
         """The gathered matrix and its factor."""
         A = self.A
-        total = A.data.nbytes + A.indices.nbytes + A.indptr.nbytes
+        total = 0 if A is None else A.data.nbytes + A.indices.nbytes + A.indptr.nbytes
         return int(total + self.factor.memory_bytes())
 
     def solve(self, b_global: np.ndarray) -> np.ndarray:
