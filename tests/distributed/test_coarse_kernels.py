@@ -123,3 +123,40 @@ def test_restricted_bounds_keep_every_prolonged_correction_within_the_fine_bound
     assert np.all(lc0 == -np.inf) and np.all(hc0 == np.inf)
     lc1, hc1 = T.restrict_bounds(lo, hi, rows=np.zeros(nf, np.uint8))
     assert np.all(lc1 == -np.inf) and np.all(hc1 == np.inf)
+
+
+def test_gathered_coarsest_factor_solves_and_follows_low_rank_changes():
+    # an SPD matrix large enough for the low-rank path (4 x 96 rows and more), one inert dof
+    rng = np.random.default_rng(7)
+    n = 450
+    G = sp.random(n, n, density=0.01, random_state=7)
+    A = (G + G.T + sp.diags(np.full(n, 10.0))).tocsr()
+    A.sort_indices()
+    inert = np.zeros(n, np.uint8)
+    inert[3] = 1
+    f = _core.GatheredCoarsestFactor()
+
+    def put(M, update):
+        f.set(M.indptr.astype(np.int64), M.indices.astype(np.int64), M.data, inert, update)
+
+    def reference(M):
+        keep = sp.diags(1.0 - inert)
+        S = (keep @ M @ keep + sp.diags(inert.astype(float))).toarray()
+        return np.linalg.solve(S, b)
+
+    b = rng.standard_normal(n)
+    b[3] = 0.0
+    put(A, False)
+    assert np.allclose(f.solve(b), reference(A), rtol=1e-10, atol=1e-12)
+    assert f.factorizations == 1 and not f.shifted
+    # a few rows change: a low-rank correction of the kept factor, not a new one
+    B = A.tolil()
+    for i in (10, 11, 200):
+        B[i, i] = B[i, i] + 5.0
+    B = B.tocsr()
+    B.sort_indices()
+    put(B, True)
+    assert f.factorizations == 1
+    assert np.allclose(f.solve(b), reference(B), rtol=1e-10, atol=1e-12)
+    put(B, False)
+    assert f.factorizations == 2
