@@ -103,5 +103,6 @@ void bind_solver(py::module_& m);
 void bind_local_levels(py::module_& m);
 void bind_testing(py::module_& m);
 void bind_distributed(py::module_& m);
+void bind_distributed_levels(py::module_& m);
 
 }  // namespace cmg::bindings

@@ -7,7 +7,10 @@ where a row reads a neighbour's new value.
 - Restriction: the owners of the fine rows form the residual, the ghosts get it, and the owner of a
   coarse row sums its fine rows in ascending global id. Bounds restrict by minima and maxima (exact).
 - Prolongation: every local row (ghost rows are their owners' rows), so no exchange is needed.
-- Galerkin rows by their owners (operators.py), rebuilt when the truncation or a Hessian changes.
+- Galerkin rows by their owners (operators.py), rebuilt when the truncation or a Hessian changes,
+  only the rows whose inputs changed.
+- The kernels of a coarse level (Galerkin rows, residual, restriction, prolongation, bounds) are the
+  core's (cpp/mg/distributed_galerkin.hpp); this module orders them and the exchanges.
 - The coarsest level gathered and solved on every rank.
 - Norms and energies by exact sums.
 
@@ -26,8 +29,8 @@ from .anderson import DistributedAnderson
 from .colouring import colour_level
 from .comm import is_serial, op
 from .exchange import exact_dot, exact_sum
-from .operators import (GatheredCoarsest, galerkin_rows, local_transfer, max_diagonal, node_to_dof_rows,
-                        rotate_rows, sorted_csr, to_block_matrix)
+from .operators import (GatheredCoarsest, galerkin_rows, local_transfer, node_to_dof_rows, rotate_rows, rows_to_csr,
+                        sorted_csr, transfer_kernel)
 
 INF = np.inf
 COARSEST_MAX_SWEEPS = 50  # the serial coarsest solve's (solver_options.hpp kCoarsestMaxSweeps)
@@ -47,61 +50,39 @@ def _colour_rows(comm, level) -> List[np.ndarray]:
     return [np.flatnonzero(owned & (colour == c)).astype(np.int64) for c in range(ncol)]
 
 
-def restrict_bounds(P: sp.csr_matrix, lo: np.ndarray, hi: np.ndarray, n_coarse: int, d: int,
-                    rows: Optional[np.ndarray] = None):
-    """Monotone restriction (mg/bound_restriction.hpp) of the bounds lo <= c <= hi of the fine dofs
-    in `rows` (all where None; bounds flattened per dof, +-inf where none) through P: a coarse
-    correction within the returned bounds keeps every fine dof within its own."""
-    lo_c = np.full(n_coarse * d, -INF)
-    hi_c = np.full(n_coarse * d, INF)
-    lo, hi = lo.ravel(), hi.ravel()
-    dofs = np.flatnonzero(np.isfinite(lo) | np.isfinite(hi)) if rows is None else rows
-    dofs = dofs[np.isfinite(lo[dofs]) | np.isfinite(hi[dofs])]
-    if not len(dofs):
-        return lo_c.reshape(-1, d), hi_c.reshape(-1, d)
-    S = P[dofs]
-    counts = np.diff(S.indptr)
-    sigma = np.add.reduceat(np.abs(S.data), S.indptr[:-1]) if len(S.data) else np.zeros(len(dofs))
-    sigma = np.where(counts > 0, sigma, 0.0)
-    scale = 1.0 / np.maximum(1.0, sigma)
-    l_s, h_s = lo[dofs] * scale, hi[dofs] * scale
-    w, g = S.data, S.indices
-    lr, hr = np.repeat(l_s, counts), np.repeat(h_s, counts)
-    pos, neg = w > 0, w < 0
-    np.minimum.at(hi_c, g[pos], hr[pos])
-    np.maximum.at(lo_c, g[pos], lr[pos])
-    np.minimum.at(hi_c, g[neg], -lr[neg])
-    np.maximum.at(lo_c, g[neg], -hr[neg])
-    return lo_c.reshape(-1, d), hi_c.reshape(-1, d)
-
-
 class CoarseLevel:
-    """A coarse level on one rank: its nodes, colours, the transfer from the level below, its
-    Galerkin rows and the vectors of the cycle."""
+    """A coarse level on one rank: its nodes, colours, its rows and smoother (the core's CoarseRows,
+    written in place by the Galerkin kernel), the transfer from the level below (the core's
+    DistributedTransfer) and the vectors of the cycle."""
 
     def __init__(self, comm, level, below, d: int):
         self.comm, self.level, self.d = comm, level, d
         self.n = len(level.gid)
         self.owned = level.owner == level.rank
-        self.owned_dofs = node_to_dof_rows(np.flatnonzero(self.owned), d)
-        self.halo = level.halo
+        self.owned_u8 = self.owned.astype(np.uint8)
+        self.halo = None if is_serial(comm) else level.halo  # one rank: no ghosts, nothing to exchange
         self.colours = _colour_rows(comm, level)
-        self.P = local_transfer(level, below, d, comm) if below is not None else None  # from the level below
+        # without exchanges between the colours a pass is one call over the colours in turn: the same
+        # rows in the same order (reversed backward), without a call per colour
+        self.order = None if self.halo is not None else np.concatenate(self.colours or [np.zeros(0, np.int64)])
+        self.rows = (_core.CoarseRows2D if d == 2 else _core.CoarseRows3D)()
+        self.transfer = None  # from the level below
+        if below is not None:
+            self.transfer = transfer_kernel(local_transfer(level, below, d, comm), level, below, d)
         self.x = np.zeros((self.n, d))
         self.b = np.zeros((self.n, d))
         self.lo = np.full((self.n, d), -INF)
         self.hi = np.full((self.n, d), INF)
         self.bounded = np.zeros(self.n, np.uint8)
         self.any_bounds = False
-        self.A = None
-        self.smoother = None
 
-    def set_matrix(self, A: sp.csr_matrix) -> None:
-        """The level's Galerkin rows (owned rows; ghost rows empty) and their smoother."""
-        self.A = A
-        scale = max_diagonal(self.comm, A, self.owned_dofs)
-        cls = _core.LocalLevelSmoother2D if self.d == 2 else _core.LocalLevelSmoother3D
-        self.smoother = cls(to_block_matrix(A, self.d), scale)
+    def refresh(self) -> None:
+        """The smoother's diagonal inverses after the rows changed (the inert threshold relative to the
+        largest diagonal entry of the whole level, the same on every rank)."""
+        scale = self.rows.max_diagonal(self.owned_u8)
+        if not is_serial(self.comm):
+            scale = self.comm.allreduce(scale, op=op(self.comm, "MAX"))
+        self.rows.invert(scale)
 
     def set_bounds(self, lo: np.ndarray, hi: np.ndarray) -> None:
         """Restricted bounds: the owned rows' are complete, the ghosts' from their owners."""
@@ -111,6 +92,16 @@ class CoarseLevel:
             self.halo.update(both)
             self.lo, self.hi = np.ascontiguousarray(both[:, :self.d]), np.ascontiguousarray(both[:, self.d:])
 
+    def clear_bounds(self) -> None:
+        self.lo[:] = -INF
+        self.hi[:] = INF
+
+    def set_b(self, b: np.ndarray) -> None:
+        """The right-hand side restricted on the owned rows, the ghosts' from their owners."""
+        self.b = b
+        if self.halo is not None:
+            self.halo.update(self.b)
+
     def set_bounded(self, bounded: bool) -> None:
         """Which rows have a finite bound, and whether any row on any rank has one."""
         b = bounded & (np.isfinite(self.lo).any(axis=1) | np.isfinite(self.hi).any(axis=1))
@@ -119,72 +110,91 @@ class CoarseLevel:
 
     def sweep(self, forward: bool, omega: float) -> None:
         """One (projected) Gauss-Seidel pass, colour by colour, the ghosts exchanged after each."""
-        order = self.colours if forward else self.colours[::-1]
+        if self.order is not None:
+            order = [self.order]
+        else:
+            order = self.colours if forward else self.colours[::-1]
         for rows in order:
             if self.any_bounds:
-                self.smoother.sweep(self.x, self.b, rows, forward, omega, self.lo, self.hi, self.bounded)
+                self.rows.sweep(self.x, self.b, rows, forward, omega, self.lo, self.hi, self.bounded)
             else:
-                self.smoother.sweep(self.x, self.b, rows, forward, omega)
+                self.rows.sweep(self.x, self.b, rows, forward, omega)
             if self.halo is not None:
                 self.halo.update(self.x)
 
     def residual(self) -> np.ndarray:
         """b - A x on the owned rows, the ghosts' from their owners."""
-        r = np.zeros((self.n, self.d))
-        r.ravel()[self.owned_dofs] = self.b.ravel()[self.owned_dofs] - (self.A @ self.x.ravel())[self.owned_dofs]
+        r = self.rows.residual(self.x, self.b, self.owned_u8)
         if self.halo is not None:
             self.halo.update(r)
         return r
 
+    def memory_bytes(self) -> int:
+        own = self.rows.memory_bytes() + (self.transfer.memory_bytes() if self.transfer is not None else 0)
+        return int(own + self.x.nbytes + self.b.nbytes + self.lo.nbytes + self.hi.nbytes + self.bounded.nbytes)
+
 
 class CoarseCorrection:
-    """The coarse levels of one rank and the multilevel correction of the serial CoarseCycle."""
+    """The coarse levels of one rank and the multilevel correction of the serial CoarseCycle: the
+    core's kernels on each level, the cycle and the exchanges here."""
 
     def __init__(self, comm, hierarchy, d: int, fine_transfer: sp.csr_matrix):
         self.comm, self.d = comm, d
         levels = hierarchy.levels
         self.levels = [CoarseLevel(comm, levels[l], levels[l - 1] if l > 0 else None, d)
                        for l in range(len(levels) - 1)]
-        self.fine_transfer = fine_transfer  # onto the fine level from the top coarse level (rotated rows)
+        # onto the fine level from the top coarse level (rotated rows)
+        self.fine_transfer = transfer_kernel(fine_transfer, levels[-1], levels[-2], d)
         self.coarsest: Optional[GatheredCoarsest] = None
 
-    def build(self, fine, A_fine: sp.csr_matrix, mask: np.ndarray) -> None:
-        """Every coarse matrix for the fine matrix (with the Hessian blocks) and truncation mask."""
-        top = len(self.levels) - 1
-        A = galerkin_rows(self.comm, fine.level, self.levels[top].level, A_fine, self.fine_transfer, mask, self.d)
-        for l in range(top, -1, -1):
-            L = self.levels[l]
-            L.set_matrix(A)
-            if l > 0:
-                below = self.levels[l - 1]
-                A = galerkin_rows(self.comm, L.level, below.level, A, L.P, np.ones(L.n * self.d), self.d)
-        self.coarsest = GatheredCoarsest(self.comm, self.levels[0].level, self.levels[0].A, self.d)
+    def build(self, fine, mask: np.ndarray, hess_nodes: np.ndarray, hess: np.ndarray) -> None:
+        """Every coarse matrix for the fine matrix with the Hessian blocks `hess` (k, d, d) added at
+        the owned nodes hess_nodes, and the truncation mask (per fine dof, 0/1). Rows whose inputs did
+        not change since the last build are kept (they would get the same bits). Collective."""
+        d, top = self.d, len(self.levels) - 1
+        C = self.levels[top]
+        # the fine level's BlockMatrix is a copy the core hands out: taken per build and dropped, not a
+        # second fine matrix held for the whole solve
+        galerkin_rows(self.comm, fine.level, C.level, self.fine_transfer, C.rows, d, A=fine.core.matrix,
+                      mask=mask, hess_nodes=hess_nodes, hess=hess)
+        C.refresh()
+        for l in range(top, 0, -1):
+            L, below = self.levels[l], self.levels[l - 1]
+            galerkin_rows(self.comm, L.level, below.level, L.transfer, below.rows, d, above=L.rows)
+            below.refresh()
+        L0 = self.levels[0]
+        if self.coarsest is None:
+            self.coarsest = GatheredCoarsest(self.comm, L0.level, d)
+            self.coarsest.set_matrix(rows_to_csr(L0.rows, d))
+        elif _any(self.comm, L0.rows.changed.any()):
+            self.coarsest.set_matrix(rows_to_csr(L0.rows, d))
+
+    def memory_bytes(self) -> int:
+        """The bytes of the coarse levels (rows, smoother, vectors), the transfers with the Galerkin
+        kernels' Z rows and patterns, and the gathered coarsest level."""
+        total = self.fine_transfer.memory_bytes() + sum(L.memory_bytes() for L in self.levels)
+        if self.coarsest is not None:
+            total += self.coarsest.memory_bytes()
+        return int(total)
 
     def correction(self, opt, r_fine: np.ndarray, mask: np.ndarray, lo_f: np.ndarray, hi_f: np.ndarray,
                    bounded: bool) -> np.ndarray:
         """w = M P c on every local fine row for the fine residual r (ghost rows fresh), the mask and
         the fine correction bounds (+-inf where none; ghost rows fresh)."""
-        d, top = self.d, len(self.levels) - 1
-        C = self.levels[top]
-        P = self.fine_transfer
-        rm = (r_fine.ravel() * mask)
-        C.b[:] = 0.0
-        C.b.ravel()[C.owned_dofs] = (P.T @ rm)[C.owned_dofs]  # sums in ascending fine dof order
-        if C.halo is not None:
-            C.halo.update(C.b)
+        top = len(self.levels) - 1
+        C, T = self.levels[top], self.fine_transfer
+        m = np.ascontiguousarray(mask, np.uint8)
+        C.set_b(T.restrict_residual(r_fine, m))  # sums in ascending fine node
         if bounded:
-            lo = np.where(mask > 0, lo_f.ravel(), -INF)
-            hi = np.where(mask > 0, hi_f.ravel(), INF)
-            C.set_bounds(*restrict_bounds(P, lo, hi, C.n, d))
+            C.set_bounds(*T.restrict_bounds(lo_f, hi_f, mask=m))
         else:
-            C.lo[:] = -INF
-            C.hi[:] = INF
+            C.clear_bounds()
         C.set_bounded(bounded)
         C.x[:] = 0.0
         self._cycle(opt, top, opt.cycle)
         if opt.cycle != "V":
             self._cycle(opt, top, "V" if opt.cycle == "F" else "W")
-        return (P @ C.x.ravel()) * mask
+        return T.prolong(C.x, m).ravel()
 
     def _cycle(self, opt, l: int, kind: str) -> None:
         if l == 0:
@@ -194,21 +204,15 @@ class CoarseCorrection:
         for _ in range(opt.nu1):
             L.sweep(True, opt.omega)
         for v in range(1 if kind == "V" else 2):
-            r = L.residual()
-            C.b[:] = 0.0
-            C.b.ravel()[C.owned_dofs] = (L.P.T @ r.ravel())[C.owned_dofs]
-            if C.halo is not None:
-                C.halo.update(C.b)
+            C.set_b(L.transfer.restrict_residual(L.residual()))
             if L.any_bounds:
-                rows = node_to_dof_rows(np.flatnonzero(L.bounded), self.d)
-                C.set_bounds(*restrict_bounds(L.P, L.lo - L.x, L.hi - L.x, C.n, self.d, rows))
+                C.set_bounds(*L.transfer.restrict_bounds(L.lo, L.hi, x=L.x, rows=L.bounded))
             else:
-                C.lo[:] = -INF
-                C.hi[:] = INF
+                C.clear_bounds()
             C.set_bounded(L.any_bounds)
             C.x[:] = 0.0
             self._cycle(opt, l - 1, "V" if (kind == "F" and v == 1) else kind)
-            L.x += (L.P @ C.x.ravel()).reshape(-1, self.d)
+            L.transfer.prolong_add(C.x, L.x)
         for _ in range(opt.nu2):
             L.sweep(False, opt.omega_post)
 
@@ -272,19 +276,16 @@ class DistributedMonotoneStep:
                               "projects it there)")
 
     def memory_bytes(self) -> int:
-        """The bytes of this rank's matrices, transfers and fine vectors (arrays only)."""
-        def csr(M):
-            return 0 if M is None else M.data.nbytes + M.indices.nbytes + M.indptr.nbytes
-        total = csr(self.A) + csr(self.coarse.fine_transfer) + self.f.nbytes
-        for L in self.coarse.levels:
-            total += csr(L.A) + csr(L.P) + 5 * L.x.nbytes
-        return int(total)
+        """The bytes of this rank's matrices, transfers and vectors (arrays only): the fine matrix and
+        load, and what the coarse correction holds."""
+        A = self.A
+        return int(A.data.nbytes + A.indices.nbytes + A.indptr.nbytes + self.f.nbytes + self.coarse.memory_bytes())
 
     def sweep(self, u: np.ndarray, forward: bool, omega: float) -> None:
         """One nonlinear Gauss-Seidel pass over the fine level, colour by colour, u (n, d) in place."""
         order = self.colours if forward else self.colours[::-1]
         for rows in order:
-            self.fine.core.sweep(u, rows, forward, omega)
+            self.fine.core.sweep(u, rows, forward, omega, self.opt.threads)
             if self.halo is not None:
                 self.halo.update(u)
 
@@ -309,16 +310,6 @@ class DistributedMonotoneStep:
         keep = np.abs(hess).reshape(len(hess), -1).max(axis=1, initial=0.0) > 0 if len(hess) else np.zeros(0, bool)
         hess_nodes = fine.contact_nodes[fine.owned_contacts][keep]
         return mask, lo, hi, hess_nodes, hess[keep], _any(self.comm, bounded), r
-
-    def fine_matrix_with(self, hess_nodes: np.ndarray, hess: np.ndarray) -> sp.csr_matrix:
-        """The fine matrix with the friction Hessian blocks added at their nodes."""
-        if not len(hess_nodes):
-            return self.A
-        n, d = self.n, self.d
-        blocks = np.zeros((n, d, d))
-        blocks[hess_nodes] = hess
-        H = sp.bsr_matrix((blocks, np.arange(n), np.arange(n + 1)), shape=(n * d, n * d)).tocsr()
-        return sorted_csr(self.A + H)
 
     def energy_norm(self, v: np.ndarray) -> float:
         """||v||_A over the owned rows (exact sums), v flat over the local dofs (ghosts fresh)."""
@@ -374,7 +365,7 @@ class DistributedMonotoneStep:
         changed = self.built is None or not (np.array_equal(mask, self.built[0]) and np.array_equal(hess_nodes, self.built[1])
                                              and np.array_equal(hess, self.built[2]))
         if _any(self.comm, changed):
-            self.coarse.build(self.fine, self.fine_matrix_with(hess_nodes, hess), mask)
+            self.coarse.build(self.fine, mask, hess_nodes, hess)
             self.built = key
             self.rebuilds += 1
         lap("coarse_update")

@@ -1,6 +1,7 @@
-"""The operators of a distributed cycle on one rank, as scalar-dof sparse matrices over its local nodes
-(owned and ghost, in ascending global id): the prolongation rows of every local node, the Galerkin
-rows of every owned coarse node, and the coarsest level gathered onto every rank.
+"""The operators of a distributed cycle on one rank over its local nodes (owned and ghost, in ascending
+global id): the prolongation rows of every local node (set up as scipy matrices, then handed to the
+core's DistributedTransfer), the Galerkin rows of every owned coarse node (the core's kernel on d x d
+blocks, cpp/mg/distributed_galerkin.hpp), and the coarsest level gathered onto every rank.
 
 Every sum is taken in an order that does not depend on the partition: a row's entries are stored by
 ascending global id (local indices ascend with it) and a product adds them in that order, so each
@@ -97,17 +98,73 @@ def rotate_rows(P: sp.csr_matrix, nodes: np.ndarray, frames: np.ndarray, d: int)
     return sorted_csr(R @ P)
 
 
-def galerkin_rows(comm, fine_level, coarse_level, A: sp.csr_matrix, P: sp.csr_matrix, mask: np.ndarray,
-                  d: int) -> sp.csr_matrix:
-    """The owned rows of P^T M A M P on the coarse level (M = diag(mask) per fine dof; ghost rows
-    empty): (M A M P) formed by the owners of the fine rows, the ghost rows sent, then each owned
-    coarse row summed over its fine rows in ascending order. A's owned rows must be complete."""
-    owned_f = fine_level.owner == fine_level.rank
-    Mm = sp.diags(mask.astype(float))
-    Z = sorted_csr(keep_rows(Mm @ A @ Mm, np.repeat(owned_f, d)) @ P)
-    Z = exchange_ghost_rows(comm, fine_level.halo, Z, owned_f, coarse_level.gid, d)
-    owned_c = np.repeat(coarse_level.owner == coarse_level.rank, d)
-    return sorted_csr(keep_rows(sorted_csr(P.T), owned_c) @ Z)
+def transfer_kernel(P: sp.csr_matrix, fine_level, coarse_level, d: int):
+    """The core's DistributedTransfer of a local transfer (scalar CSR, rows of every local fine node):
+    restriction, prolongation, bound restriction and the Galerkin rows it forms, on d x d blocks. The
+    scipy matrix is not kept (one copy of P per level)."""
+    from .. import _core
+    cls = _core.DistributedTransfer2D if d == 2 else _core.DistributedTransfer3D
+    return cls(to_block_matrix(P, d), (fine_level.owner == fine_level.rank).astype(np.uint8),
+               (coarse_level.owner == coarse_level.rank).astype(np.uint8))
+
+
+def _exchange_z_rows(comm, fine_level, coarse_gid: np.ndarray, T) -> None:
+    """The ghost rows of Z = (M A M) P from their owners: the patterns (columns as global ids) once,
+    the blocks at every rebuild. Collective."""
+    halo = fine_level.halo
+    empty = np.zeros(0, np.int64)
+    if is_serial(comm) or halo is None or not (halo.sources or halo.destinations):
+        if not T.has_ghost_pattern:
+            T.set_ghost_pattern(empty, np.zeros(1, np.int64), empty)
+        return
+    if not T.has_ghost_pattern:
+        sent = [None] * comm.size
+        for r in halo.destinations:
+            ptr, cols = T.z_pattern(halo.send[r])
+            sent[r] = (ptr, coarse_gid[cols])
+        got = comm.alltoall(sent)
+        nodes, ptrs, cols = [empty], [np.zeros(1, np.int64)], [empty]
+        for r in halo.sources:
+            ptr, gcols = got[r]
+            J = np.searchsorted(coarse_gid, gcols)
+            if len(J) and (np.any(J >= len(coarse_gid)) or np.any(coarse_gid[np.minimum(J, len(coarse_gid) - 1)] != gcols)):
+                raise RuntimeError("a ghost row reaches a node this rank does not hold")  # pragma: no cover
+            nodes.append(np.asarray(halo.recv[r], np.int64))
+            ptrs.append(ptr[1:] + ptrs[-1][-1])
+            cols.append(J.astype(np.int64))
+        T.set_ghost_pattern(np.concatenate(nodes), np.concatenate(ptrs), np.concatenate(cols))
+    got = comm.alltoall([T.z_values(halo.send[r]) if r in halo.send else None for r in range(comm.size)])
+    if halo.sources:
+        T.set_ghost_values(np.concatenate([halo.recv[r] for r in halo.sources]).astype(np.int64),
+                           np.concatenate([got[r].ravel() for r in halo.sources]))
+
+
+def galerkin_rows(comm, fine_level, coarse_level, T, rows, d: int, A=None, mask=None, hess_nodes=None, hess=None,
+                  above=None) -> None:
+    """The owned rows of P^T M A M P on the coarse level into `rows` (the core's CoarseRows; ghost
+    rows empty), P = T's transfer: (M A M) P formed by the owners of the fine rows, the ghost rows
+    sent, then each owned coarse row summed over its fine rows in ascending order (the core's
+    DistributedTransfer). A: the fine BlockMatrix with the mask (per fine dof, 0/1) and the Hessian
+    blocks at hess_nodes; or above: the CoarseRows of the level above (no mask). Only the rows whose
+    inputs changed are formed again, with the bits of a full rebuild. Collective."""
+    if above is not None:
+        T.form_owned_z_from(above)
+    else:
+        if hess_nodes is None or not len(hess_nodes):
+            hess_nodes, hess = np.zeros(0, np.int64), np.zeros((0, d, d))
+        T.form_owned_z(A, np.ascontiguousarray(mask, np.uint8).ravel(), np.asarray(hess_nodes, np.int64),
+                       np.ascontiguousarray(hess, float).reshape(-1, d, d))
+    _exchange_z_rows(comm, fine_level, coarse_level.gid, T)
+    T.form_coarse(rows)
+
+
+def rows_to_csr(rows, d: int) -> sp.csr_matrix:
+    """A scalar CSR copy of a CoarseRows (for the gathered coarsest level), exact zeros dropped."""
+    indptr, indices, blocks = rows.blocks()
+    n = rows.n
+    M = sp.bsr_matrix((blocks, indices, indptr), shape=(n * d, n * d)).tocsr()
+    M.eliminate_zeros()
+    return sorted_csr(M)
 
 
 def to_block_matrix(M: sp.csr_matrix, d: int):
@@ -121,39 +178,44 @@ def to_block_matrix(M: sp.csr_matrix, d: int):
                np.ascontiguousarray(B.data.reshape(-1, d, d)))
 
 
-def max_diagonal(comm, M: sp.csr_matrix, owned_dofs: np.ndarray) -> float:
-    """The largest diagonal entry over every rank's owned rows (the same on every rank)."""
-    diag = M.diagonal()[owned_dofs] if len(owned_dofs) else np.zeros(0)
-    local = float(diag.max()) if len(diag) else 0.0
-    return local if is_serial(comm) else comm.allreduce(local, op=op(comm, "MAX"))
-
-
 class GatheredCoarsest:
-    """The coarsest level on every rank: its owned rows gathered (global node order), factored once
-    per matrix (SuperLU: one thread, the same bits everywhere), solved redundantly. Inert dofs (a
-    zero diagonal: every fine dof below truncated) get identity rows and stay zero."""
+    """The coarsest level on every rank: its owned rows gathered (global node order), factored by the
+    core's sparse LDL^T and kept current across rebuilds by low-rank corrections (one thread, the
+    same matrices in the same sequence on every rank: the same bits everywhere), solved redundantly.
+    Inert dofs (a zero diagonal: every fine dof below truncated) get identity rows and stay zero."""
 
-    def __init__(self, comm, level, A_owned_rows: sp.csr_matrix, d: int):
+    def __init__(self, comm, level, d: int):
+        from .. import _core
         self.comm, self.level, self.d = comm, level, d
+        self.factor = _core.GatheredCoarsestFactor()
+        self.A = None
+        self._smoother = None  # the projected sweeps' (made when first needed, per matrix)
+
+    def set_matrix(self, A_owned_rows: sp.csr_matrix) -> None:
+        """The level's matrix from every rank's owned rows (collective)."""
+        comm, level, d = self.comm, self.level, self.d
         n = level.num_global_nodes
         gid = level.gid
-        coo = A_owned_rows.tocoo()
-        rows = gid[coo.row // d] * d + coo.row % d
-        cols = gid[coo.col // d] * d + coo.col % d
-        parts = [(rows, cols, coo.data)] if is_serial(comm) else comm.allgather((rows, cols, coo.data))
-        r = np.concatenate([p[0] for p in parts])
-        c = np.concatenate([p[1] for p in parts])
-        v = np.concatenate([p[2] for p in parts])
-        order = np.lexsort((c, r))
-        self.A = sorted_csr(sp.csr_matrix((v[order], (r[order], c[order])), shape=(n * d, n * d)))
-        diag = self.A.diagonal()
-        scale = float(diag.max()) if len(diag) else 0.0
-        self.inert = diag <= 1e-12 * scale
-        keep = (~self.inert).astype(float)
-        S = sp.diags(keep) @ self.A @ sp.diags(keep) + sp.diags(self.inert.astype(float))
-        from scipy.sparse.linalg import splu
-        self.lu = splu(sp.csc_matrix(S))
-        self.scale = scale
+        if is_serial(comm) and np.array_equal(gid, np.arange(n)):
+            A = A_owned_rows  # one rank: its local nodes are the global ones, in order
+        else:
+            coo = A_owned_rows.tocoo()
+            rows = gid[coo.row // d] * d + coo.row % d
+            cols = gid[coo.col // d] * d + coo.col % d
+            parts = comm.allgather((rows, cols, coo.data))
+            r = np.concatenate([p[0] for p in parts])
+            c = np.concatenate([p[1] for p in parts])
+            v = np.concatenate([p[2] for p in parts])
+            order = np.lexsort((c, r))
+            A = sorted_csr(sp.csr_matrix((v[order], (r[order], c[order])), shape=(n * d, n * d)))
+        first = self.A is None
+        self.A = A
+        diag = A.diagonal()
+        self.scale = float(diag.max()) if len(diag) else 0.0
+        self.inert = diag <= 1e-12 * self.scale
+        self.factor.set(A.indptr.astype(np.int64), A.indices.astype(np.int64), A.data, self.inert.astype(np.uint8),
+                        not first)
+        self._smoother = None
 
     def gather(self, x_local: np.ndarray) -> np.ndarray:
         """The global vector (n * d) from the owned entries of every rank."""
@@ -170,7 +232,7 @@ class GatheredCoarsest:
                         omega: float) -> None:
         """One projected Gauss-Seidel pass over every row (global order), x (n, d) in place."""
         d = self.d
-        if not hasattr(self, "_smoother"):
+        if self._smoother is None:
             from .. import _core
             cls = _core.LocalLevelSmoother2D if d == 2 else _core.LocalLevelSmoother3D
             self._smoother = cls(to_block_matrix(self.A, d), self.scale)
@@ -178,7 +240,13 @@ class GatheredCoarsest:
         bounded = (np.isfinite(lo) | np.isfinite(hi)).any(axis=1).astype(np.uint8)
         self._smoother.sweep(x, b, self._rows, forward, omega, lo, hi, bounded)
 
+    def memory_bytes(self) -> int:
+        """The gathered matrix and its factor."""
+        A = self.A
+        total = 0 if A is None else A.data.nbytes + A.indices.nbytes + A.indptr.nbytes
+        return int(total + self.factor.memory_bytes())
+
     def solve(self, b_global: np.ndarray) -> np.ndarray:
         """The exact solution for the global right-hand side (inert dofs zero)."""
         b = np.where(self.inert, 0.0, b_global)
-        return self.lu.solve(b)
+        return self.factor.solve(b)

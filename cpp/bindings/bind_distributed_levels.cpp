@@ -1,0 +1,200 @@
+// The coarse levels of a distributed cycle on one rank (python/contactmg/distributed/cycle.py): a
+// level's rows and smoother (CoarseRows*D), the transfer from the level below with the Galerkin rows
+// it forms (DistributedTransfer*D). Flat kernels of mg/distributed_galerkin.hpp; the ghost exchanges
+// between them stay in Python.
+#include "bindings/common.hpp"
+#include "mg/distributed_galerkin.hpp"
+
+namespace cmg::bindings {
+
+namespace {
+
+std::vector<Index> index_list(const IArr& a) { return std::vector<Index>(a.data(), a.data() + a.size()); }
+
+std::vector<std::uint8_t> flags(const BArr& a, Index n, const char* name) {
+  if (a.size() != n) throw InputError(std::string(name) + " has " + std::to_string(a.size()) + " entries, " + std::to_string(n) + " expected");
+  return std::vector<std::uint8_t>(a.data(), a.data() + n);
+}
+
+double* writable_array(py::array_t<double>& a, const char* name, py::ssize_t size) {
+  if (!(a.flags() & py::array::c_style) || !a.writeable())
+    throw InputError(std::string(name) + " must be a writable C-contiguous array");
+  if (a.size() != size) throw InputError(std::string(name) + " has " + std::to_string(a.size()) + " entries, " + std::to_string(size) + " expected");
+  return a.mutable_data();
+}
+
+// An optional uint8 array of n entries (None: nullptr), kept alive by `keep`.
+const std::uint8_t* optional_flags(const py::object& o, Index n, const char* name, BArr& keep) {
+  if (o.is_none()) return nullptr;
+  keep = o.cast<BArr>();
+  if (keep.size() != n) throw InputError(std::string(name) + " has " + std::to_string(keep.size()) + " entries, " + std::to_string(n) + " expected");
+  return keep.data();
+}
+
+template <int d>
+void bind_levels(py::module_& m) {
+  const std::string sfx = std::to_string(d) + "D";
+  using BM = BlockMatrix<d>;
+  using C = CoarseRows<d>;
+  using T = DistributedTransfer<d>;
+  py::class_<C, std::shared_ptr<C>>(m, ("CoarseRows" + sfx).c_str(),
+                                    "A coarse level's rows on one rank (owned rows, ghost rows empty) and their Gauss-Seidel")
+      .def(py::init<>())
+      .def_property_readonly("n", &C::n)
+      .def("memory_bytes", &C::bytes)
+      .def("max_diagonal", [](const C& c, const BArr& owned) { return c.max_diagonal(flags(owned, c.n(), "owned").data()); },
+           py::arg("owned"), "the largest diagonal entry of the rows flagged in owned")
+      .def("invert", &C::invert, py::arg("scale"), "the diagonal inverses (the inert threshold 1e-12 scale)")
+      .def("residual", [](const C& c, const DArr& x, const DArr& b, const BArr& owned) {
+             require_shape(x, "x", {(py::ssize_t)c.n(), d});
+             require_shape(b, "b", {(py::ssize_t)c.n(), d});
+             const auto o = flags(owned, c.n(), "owned");
+             py::array_t<double> r({(py::ssize_t)c.n(), (py::ssize_t)d});
+             c.residual(x.data(), b.data(), o.data(), r.mutable_data());
+             return r;
+           }, py::arg("x"), py::arg("b"), py::arg("owned"), "b - A x on the owned rows (blocks ascending), zero elsewhere")
+      .def("sweep", [](C& c, py::array_t<double>& x, const DArr& b, const IArr& rows, bool forward, double omega, py::object lo,
+                       py::object hi, py::object bounded) {
+             const Index n = c.n();
+             if (!(omega > 0 && omega < 2)) throw InputError("omega must lie in (0, 2)");
+             if (c.Dinv.size() != (std::size_t)(n * d * d)) throw InputError("sweep before invert");
+             double* xx = writable_array(x, "x", n * d);
+             require_shape(b, "b", {(py::ssize_t)n, d});
+             std::vector<Index> r = index_list(rows);
+             for (Index i : r)
+               if (i < 0 || i >= n) throw InputError("a row to sweep is outside the level");
+             const SweepOrder order(std::move(r));
+             if (lo.is_none()) {
+               py::gil_scoped_release free;
+               block_gs_sweep<d>(c.A, c.Dinv, b.data(), xx, forward, order, omega);
+               return;
+             }
+             const DArr l = lo.cast<DArr>(), h = hi.cast<DArr>();
+             require_shape(l, "lo", {(py::ssize_t)n, d});
+             require_shape(h, "hi", {(py::ssize_t)n, d});
+             const std::vector<std::uint8_t> bv = flags(bounded.cast<BArr>(), n, "bounded");
+             py::gil_scoped_release free;
+             projected_gs_sweep<d>(c.A, c.Dinv, bv, c.inert, l.data(), h.data(), b.data(), xx, forward, order, omega);
+           }, py::arg("x"), py::arg("b"), py::arg("rows"), py::arg("forward"), py::arg("omega") = 1.0, py::arg("lo") = py::none(),
+           py::arg("hi") = py::none(), py::arg("bounded") = py::none(),
+           "one block (or, with bounds, projected) Gauss-Seidel pass over rows, x (n, d) in place")
+      .def("blocks", [](const C& c) {
+             return py::make_tuple(to_numpy(c.A.indptr, {(py::ssize_t)c.A.indptr.size()}),
+                                   to_numpy(c.A.indices, {(py::ssize_t)c.A.indices.size()}),
+                                   to_numpy(c.A.values, {(py::ssize_t)c.A.nnz(), d, d}));
+           }, "copies of (indptr, indices, blocks (nnz, d, d))")
+      .def_property_readonly("changed", [](const C& c) { return to_numpy(c.changed, {(py::ssize_t)c.changed.size()}); },
+                             "per row: whether the last Galerkin pass changed its values");
+
+  py::class_<T, std::shared_ptr<T>>(m, ("DistributedTransfer" + sfx).c_str(),
+                                    "The transfer onto one rank's fine nodes from the coarse level's, and the Galerkin rows it forms")
+      .def(py::init([](const BM& P, const BArr& owned_fine, const BArr& owned_coarse) {
+             return std::make_shared<T>(P, flags(owned_fine, P.rows, "owned_fine"), flags(owned_coarse, P.cols, "owned_coarse"));
+           }), py::arg("P"), py::arg("owned_fine"), py::arg("owned_coarse"))
+      .def_property_readonly("fine_nodes", &T::fine_nodes)
+      .def_property_readonly("coarse_nodes", &T::coarse_nodes)
+      .def_property_readonly("has_ghost_pattern", &T::has_ghost_pattern)
+      .def("memory_bytes", &T::bytes)
+      .def("form_owned_z", [](T& t, const BM& A, const BArr& mask, const IArr& hess_nodes, const DArr& hess) {
+             if (mask.size() != A.rows * d) throw InputError("the mask needs one entry per fine dof");
+             require_shape(hess, "hess", {(py::ssize_t)hess_nodes.size(), d, d});
+             const std::vector<Index> hn = index_list(hess_nodes);
+             py::gil_scoped_release free;
+             t.form_owned_z(A, mask.data(), hn, hess.data(), nullptr);
+           }, py::arg("A"), py::arg("mask"), py::arg("hess_nodes"), py::arg("hess"),
+           "Z = (M A M) P on the owned fine rows, A with the Hessian blocks at hess_nodes; only rows whose inputs changed")
+      .def("form_owned_z_from", [](T& t, const C& above) {
+             py::gil_scoped_release free;
+             t.form_owned_z(above.A, nullptr, {}, nullptr, above.changed.empty() ? nullptr : above.changed.data());
+           }, py::arg("rows"), "Z = A P on the owned fine rows for a coarse level's rows (recomputed where they changed)")
+      .def("z_pattern", [](const T& t, const IArr& nodes) {
+             auto pc = t.z_pattern(index_list(nodes));
+             return py::make_tuple(to_numpy(pc.first, {(py::ssize_t)pc.first.size()}), to_numpy(pc.second, {(py::ssize_t)pc.second.size()}));
+           }, py::arg("nodes"), "(block-row pointer, local coarse columns) of the owned Z rows of nodes")
+      .def("z_values", [](const T& t, const IArr& nodes) {
+             std::vector<double> v = t.z_values(index_list(nodes));
+             const py::ssize_t k = (py::ssize_t)v.size() / (d * d);
+             return moved_to_numpy(std::move(v), {k, d, d});
+           }, py::arg("nodes"), "the blocks of the owned Z rows of nodes (k, d, d)")
+      .def("set_ghost_pattern", [](T& t, const IArr& nodes, const IArr& ptr, const IArr& cols) {
+             t.set_ghost_pattern(index_list(nodes), index_list(ptr), index_list(cols));
+           }, py::arg("nodes"), py::arg("ptr"), py::arg("cols"), "every ghost Z row's pattern (local coarse columns), once")
+      .def("set_ghost_values", [](T& t, const IArr& nodes, const DArr& values) {
+             t.set_ghost_values(index_list(nodes), values.data(), (Index)values.size());
+           }, py::arg("nodes"), py::arg("values"), "the ghost Z rows' blocks from their owners")
+      .def("form_coarse", [](T& t, C& rows) {
+             py::gil_scoped_release free;
+             t.form_coarse(rows);
+           }, py::arg("rows"), "the owned coarse rows P^T Z into rows (recomputed where a Z row changed)")
+      .def("restrict_residual", [](const T& t, const DArr& r, py::object mask) {
+             require_shape(r, "r", {(py::ssize_t)t.fine_nodes(), d});
+             BArr keep;
+             const std::uint8_t* mk = optional_flags(mask, t.fine_nodes() * d, "mask", keep);
+             py::array_t<double> b({(py::ssize_t)t.coarse_nodes(), (py::ssize_t)d});
+             t.restrict_residual(r.data(), mk, b.mutable_data());
+             return b;
+           }, py::arg("r"), py::arg("mask") = py::none(), "P^T (M r) on the owned coarse rows, fine rows ascending; zero elsewhere")
+      .def("prolong", [](const T& t, const DArr& xc, py::object mask) {
+             require_shape(xc, "xc", {(py::ssize_t)t.coarse_nodes(), d});
+             BArr keep;
+             const std::uint8_t* mk = optional_flags(mask, t.fine_nodes() * d, "mask", keep);
+             py::array_t<double> xf({(py::ssize_t)t.fine_nodes(), (py::ssize_t)d});
+             t.prolong(xc.data(), mk, xf.mutable_data(), false);
+             return xf;
+           }, py::arg("xc"), py::arg("mask") = py::none(), "M P xc on every local fine row")
+      .def("prolong_add", [](const T& t, const DArr& xc, py::array_t<double>& xf) {
+             require_shape(xc, "xc", {(py::ssize_t)t.coarse_nodes(), d});
+             t.prolong(xc.data(), nullptr, writable_array(xf, "xf", t.fine_nodes() * d), true);
+           }, py::arg("xc"), py::arg("xf"), "xf += P xc on every local fine row, in place")
+      .def("restrict_bounds", [](const T& t, const DArr& lo, const DArr& hi, py::object x, py::object mask, py::object rows) {
+             const py::ssize_t nf = t.fine_nodes(), nc = t.coarse_nodes();
+             require_shape(lo, "lo", {nf, d});
+             require_shape(hi, "hi", {nf, d});
+             DArr xs;
+             if (!x.is_none()) {
+               xs = x.cast<DArr>();
+               require_shape(xs, "x", {nf, d});
+             }
+             BArr km, kr;
+             const std::uint8_t* mk = optional_flags(mask, nf * d, "mask", km);
+             const std::uint8_t* rw = optional_flags(rows, nf, "rows", kr);
+             py::array_t<double> lc({nc, (py::ssize_t)d}), hc({nc, (py::ssize_t)d});
+             t.restrict_bounds(lo.data(), hi.data(), x.is_none() ? nullptr : xs.data(), mk, rw, lc.mutable_data(), hc.mutable_data());
+             return py::make_tuple(lc, hc);
+           }, py::arg("lo"), py::arg("hi"), py::arg("x") = py::none(), py::arg("mask") = py::none(), py::arg("rows") = py::none(),
+           "monotone restriction of the bounds lo - x <= c <= hi - x of the fine rows flagged in rows (all if None), "
+           "components with mask 0 skipped: (lo_c, hi_c) (n_coarse, d)");
+}
+
+}  // namespace
+
+void bind_distributed_levels(py::module_& m) {
+  using F = GatheredCoarsestFactor;
+  py::class_<F, std::shared_ptr<F>>(m, "GatheredCoarsestFactor",
+                                    "The gathered coarsest level's sparse LDL^T with the serial solver's low-rank updates "
+                                    "(one thread, the same bits on every rank)")
+      .def(py::init<>())
+      .def("set", [](F& f, const IArr& indptr, const IArr& indices, const DArr& data, const BArr& inert, bool may_update) {
+             const Index n = (Index)indptr.size() - 1;
+             if (n < 0 || indices.size() != data.size() || indptr.data()[n] != (Index)indices.size())
+               throw InputError("indptr, indices and data are not one CSR matrix");
+             const std::vector<std::uint8_t> in = flags(inert, n, "inert");
+             py::gil_scoped_release free;
+             f.set(n, indptr.data(), indices.data(), data.data(), in.data(), may_update);
+           }, py::arg("indptr"), py::arg("indices"), py::arg("data"), py::arg("inert"), py::arg("may_update"),
+           "the matrix to solve with (symmetric scalar CSR; the inert dofs' rows and columns made identity); "
+           "may_update: a low-rank correction of the kept factorization is allowed")
+      .def_property_readonly("shifted", &F::shifted, "whether the matrix was semi-definite and factorized shifted by 1e-10 diag")
+      .def_property_readonly("factorizations", &F::factorizations)
+      .def("memory_bytes", &F::bytes)
+      .def("solve", [](F& f, const DArr& b) {
+             if (b.size() != f.n()) throw InputError("b has " + std::to_string(b.size()) + " entries, " + std::to_string(f.n()) + " expected");
+             py::array_t<double> x(f.n());
+             f.solve(b.data(), x.mutable_data());
+             return x;
+           }, py::arg("b"), "S^-1 b");
+  bind_levels<2>(m);
+  bind_levels<3>(m);
+}
+
+}  // namespace cmg::bindings
