@@ -93,6 +93,7 @@ class CoarseLevel:
             self.lo, self.hi = np.ascontiguousarray(both[:, :self.d]), np.ascontiguousarray(both[:, self.d:])
 
     def clear_bounds(self) -> None:
+        """No bounds on any row (an unbounded correction)."""
         self.lo[:] = -INF
         self.hi[:] = INF
 
@@ -130,6 +131,7 @@ class CoarseLevel:
         return r
 
     def memory_bytes(self) -> int:
+        """The bytes of the level's rows and smoother, its transfer with the Galerkin kernel's Z rows, and its vectors."""
         own = self.rows.memory_bytes() + (self.transfer.memory_bytes() if self.transfer is not None else 0)
         return int(own + self.x.nbytes + self.b.nbytes + self.lo.nbytes + self.hi.nbytes + self.bounded.nbytes)
 
