@@ -76,6 +76,19 @@ struct LocalContactLevel {
     });
   }
 
+  // A v over every local row (the ghost rows partial: only the owned rows are complete)
+  py::array_t<double> multiply(const DArr& v, int threads) const {
+    require_shape(v, "v", {(py::ssize_t)n(), d});
+    if (threads < 1) throw InputError("threads must be >= 1");
+    py::array_t<double> y({(py::ssize_t)n(), (py::ssize_t)d});
+    double* out = y.mutable_data();
+    const double* in = v.data();
+    py::gil_scoped_release free;
+    ThreadScope team(threads);
+    P.matrix().multiply(in, out);
+    return y;
+  }
+
   // f - A u on `rows` (zero elsewhere)
   py::array_t<double> residual(const DArr& u, const IArr& rows) const {
     require_shape(u, "u", {(py::ssize_t)n(), d});
@@ -212,6 +225,9 @@ void bind_local(py::module_& m) {
            "one nonlinear Gauss-Seidel pass over `rows` (in order, or reversed), u (n, d) in place; threads > 1: "
            "`rows` are one colour, updated on that many threads")
       .def("residual", &L::residual, py::arg("u"), py::arg("rows"), "f - A u on rows (zero elsewhere)")
+      .def("multiply", &L::multiply, py::arg("v"), py::arg("threads") = 1, "A v on every local row (owned rows complete)")
+      .def_property_readonly("memory_bytes", [](const L& l) { return l.P.memory_bytes(); },
+                             "bytes of the level's matrix, load, Dirichlet and contact data")
       .def("linearize", &L::linearize, py::arg("u"), py::arg("r"), py::arg("contacts"),
            "(mask, lo, hi, hessian, bounded) at the given contact nodes; the friction gradient is added into r")
       .def("contact_state", &L::contact_state, py::arg("u"), py::arg("r"), py::arg("contacts"))

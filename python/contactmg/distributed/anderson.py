@@ -32,6 +32,11 @@ class DistributedAnderson:
         self.last_gnorm = 0.0
         self.accelerated = False
 
+    def memory_bytes(self) -> int:
+        """The bytes of the history and the last iterate held now."""
+        held = [v for pair in self.pairs for v in pair] + (list(self.last) if self.last is not None else [])
+        return int(sum(v.nbytes for v in held))
+
     def _dot(self, a: np.ndarray, b: np.ndarray) -> float:
         return exact_dot(a[self.owned], b[self.owned], self.comm)
 

@@ -30,7 +30,7 @@ from .colouring import colour_level
 from .comm import is_serial, op
 from .exchange import exact_dot, exact_sum
 from .operators import (GatheredCoarsest, galerkin_rows, local_transfer, node_to_dof_rows, rotate_rows, rows_to_csr,
-                        sorted_csr, transfer_kernel)
+                        transfer_kernel)
 
 INF = np.inf
 COARSEST_MAX_SWEEPS = 50  # the serial coarsest solve's (solver_options.hpp kCoarsestMaxSweeps)
@@ -259,8 +259,6 @@ class DistributedMonotoneStep:
         self.owned_dofs = node_to_dof_rows(np.flatnonzero(self.owned), d)
         self.halo = lev.halo
         self.colours = _colour_rows(comm, lev)
-        B = fine.core.matrix
-        self.A = sorted_csr(sp.bsr_matrix((B.data, B.indices, B.indptr), shape=B.shape).tocsr())
         self.f = fine.core.load
         P = local_transfer(lev, hierarchy.levels[-2], d, comm)
         P = rotate_rows(P, fine.contact_nodes, fine.frames, d)
@@ -278,10 +276,13 @@ class DistributedMonotoneStep:
                               "projects it there)")
 
     def memory_bytes(self) -> int:
-        """The bytes of this rank's matrices, transfers and vectors (arrays only): the fine matrix and
-        load, and what the coarse correction holds."""
-        A = self.A
-        return int(A.data.nbytes + A.indices.nbytes + A.indptr.nbytes + self.f.nbytes + self.coarse.memory_bytes())
+        """The bytes of this rank's matrices, transfers and vectors (arrays only): the fine level (matrix,
+        load, Dirichlet and contact data, as the core holds them), what the coarse correction holds, and
+        the Anderson history under Coulomb friction."""
+        total = self.fine.core.memory_bytes + self.coarse.memory_bytes()
+        if self.anderson is not None:
+            total += self.anderson.memory_bytes()
+        return int(total)
 
     def sweep(self, u: np.ndarray, forward: bool, omega: float) -> None:
         """One nonlinear Gauss-Seidel pass over the fine level, colour by colour, u (n, d) in place."""
@@ -313,9 +314,13 @@ class DistributedMonotoneStep:
         hess_nodes = fine.contact_nodes[fine.owned_contacts][keep]
         return mask, lo, hi, hess_nodes, hess[keep], _any(self.comm, bounded), r
 
+    def multiply(self, v: np.ndarray) -> np.ndarray:
+        """A v (flat) on every local row, the owned rows complete: the core's product."""
+        return self.fine.core.multiply(v.reshape(-1, self.d), self.opt.threads).ravel()
+
     def energy_norm(self, v: np.ndarray) -> float:
         """||v||_A over the owned rows (exact sums), v flat over the local dofs (ghosts fresh)."""
-        Av = self.A @ v
+        Av = self.multiply(v)
         o = self.owned_dofs
         return float(np.sqrt(max(exact_dot(v[o], Av[o], self.comm), 0.0)))
 
@@ -386,7 +391,7 @@ class DistributedMonotoneStep:
     def record(self, u: np.ndarray) -> dict:
         """Energy (without the constant of the Dirichlet values), ||u||_A and the contact counts."""
         uf = u.ravel()
-        Au = self.A @ uf
+        Au = self.multiply(uf)
         o = self.owned_dofs
         e = exact_sum(np.concatenate([0.5 * uf[o] * Au[o], -self.f.ravel()[o] * uf[o]]), self.comm)
         r = (self.f.ravel() - Au).reshape(-1, self.d)
