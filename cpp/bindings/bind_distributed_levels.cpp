@@ -86,7 +86,7 @@ void bind_levels(py::module_& m) {
       .def_property_readonly("changed", [](const C& c) { return to_numpy(c.changed, {(py::ssize_t)c.changed.size()}); },
                              "per row: whether the last Galerkin pass changed its values");
 
-  py::class_<T, std::shared_ptr<T>>(m, ("DistributedTransfer" + sfx).c_str(),
+  py::class_<T, std::shared_ptr<T>>(m, ("DistributedTransfer" + sfx).c_str(), py::dynamic_attr(),
                                     "The transfer onto one rank's fine nodes from the coarse level's, and the Galerkin rows it forms")
       .def(py::init([](const BM& P, const BArr& owned_fine, const BArr& owned_coarse) {
              return std::make_shared<T>(P, flags(owned_fine, P.rows, "owned_fine"), flags(owned_coarse, P.cols, "owned_coarse"));

@@ -30,7 +30,7 @@ from contactmg.mesh.generators import hertz_half_disk, hertz_projector
 from contactmg.mesh.generators_3d import ball_projector, box, half_ball
 from contactmg.mesh.hierarchy import MeshHierarchy
 from output_checks import MESHES as OUTPUT_MESHES, write_fields
-from solve_checks import CASES as SOLVE_CASES, solve_case
+from solve_checks import CASES as SOLVE_CASES, RANKS_ONLY, solve_case
 
 LEVELS = 3
 # (coarse mesh, boundary projector): the half disks' new nodes on the arc are projected onto it
@@ -214,7 +214,7 @@ def check_pieces(comm) -> None:
 
 def solve_cases(comm, folder: str) -> None:
     """Part "solve": each case of solve_checks.CASES, saved by rank 0 as FOLDER/<case>.npz."""
-    for name in SOLVE_CASES:
+    for name in [*SOLVE_CASES, *RANKS_ONLY]:
         got = solve_case(name, comm)
         if comm.rank == 0:
             np.savez(f"{folder}/{name}.npz", **got)

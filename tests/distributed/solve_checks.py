@@ -18,16 +18,21 @@ CASES = {
     "sphere-tetra-coulomb": (sphere, 2, "tetra", Coulomb(0.4), None),
     "sphere-hexahedron-tresca": (sphere, 2, "hexahedron", Tresca(0.002), None),
 }
+# compared across rank counts only, over their first cycles: level 3 has ghost nodes at the edge of a
+# fine layer whose Galerkin rows reach coarse nodes the rank does not hold (left out: no owned coarse
+# row needs them), which the smaller cases do not have
+RANKS_ONLY = {"sphere-tetra-level3-coulomb": (sphere, 3, "tetra", Coulomb(0.4), None)}
+RANKS_ONLY_CYCLES = 3
 OPTIONS = SolverOptions(cycle="F", tol=1e-11)
 
 
 def solve_case(name, comm):
-    example, levels, cell, friction, part = CASES[name]
+    example, levels, cell, friction, part = CASES[name] if name in CASES else RANKS_ONLY[name]
     if part == "scattered":
         from contactmg.mesh.generators import hertz_half_disk
         part = np.arange(hertz_half_disk(cell).num_cells) % comm.size
     problem = example(levels, cell, friction, comm, part=part)
-    result = problem.solve(OPTIONS)
+    result = problem.solve(OPTIONS if name in CASES else OPTIONS.replace(max_cycles=RANKS_ONLY_CYCLES))
     u = result.gathered_u()
     return {"u": u, "cycles": result.cycles, "converged": result.converged,
             "correction": np.array([h["correction_norm"] for h in result.history]),

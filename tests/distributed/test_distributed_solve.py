@@ -14,7 +14,7 @@ from contactmg.model.problem import Problem
 from contactmg.solve.options import SolverOptions
 
 from mpi_launch import SUITE, missing, require_part
-from solve_checks import CASES, OPTIONS, solve_case
+from solve_checks import CASES, OPTIONS, RANKS_ONLY, solve_case
 
 ONE_RANK = {}
 
@@ -71,7 +71,7 @@ pytestmark = [pytest.mark.mpi]
 @pytest.mark.parametrize("ranks", [r for r in sorted(SUITE) if "solve" in SUITE[r]])
 def test_every_rank_count_gives_the_one_rank_bits(ranks):
     r, folder = require_part(ranks, "solve")
-    for name in CASES:
+    for name in [*CASES, *RANKS_ONLY]:
         assert f"OK solve {name}" in r.stdout.splitlines(), r.stdout
         got, ref = np.load(f"{folder}/{name}.npz"), one_rank(name)
         assert int(got["cycles"]) == ref["cycles"]

@@ -110,7 +110,14 @@ def transfer_kernel(P: sp.csr_matrix, fine_level, coarse_level, d: int):
 
 def _exchange_z_rows(comm, fine_level, coarse_gid: np.ndarray, T) -> None:
     """The ghost rows of Z = (M A M) P from their owners: the patterns (columns as global ids) once,
-    the blocks at every rebuild. Collective."""
+    the blocks at every rebuild. Collective.
+
+    A ghost row reaching a coarse node this rank does not hold is left out: no owned coarse row
+    sums it. (If an owned coarse node J has P_iJ != 0, every column K of Z_i shares a coarse cell
+    with J: the fine cell of i and a neighbour j lies in one coarse cell, whose vertices are J (the
+    smallest face holding i has J) and K (P_jK != 0). So K is local.) A ghost fine node at the edge
+    of the layer may have such a row; it is sent because the halo sends every ghost its owner's
+    values."""
     halo = fine_level.halo
     empty = np.zeros(0, np.int64)
     if is_serial(comm) or halo is None or not (halo.sources or halo.destinations):
@@ -124,19 +131,30 @@ def _exchange_z_rows(comm, fine_level, coarse_gid: np.ndarray, T) -> None:
             sent[r] = (ptr, coarse_gid[cols])
         got = comm.alltoall(sent)
         nodes, ptrs, cols = [empty], [np.zeros(1, np.int64)], [empty]
+        T.kept_blocks = {}  # per source rank: which received blocks belong to rows kept
         for r in halo.sources:
             ptr, gcols = got[r]
-            J = np.searchsorted(coarse_gid, gcols)
-            if len(J) and (np.any(J >= len(coarse_gid)) or np.any(coarse_gid[np.minimum(J, len(coarse_gid) - 1)] != gcols)):
-                raise RuntimeError("a ghost row reaches a node this rank does not hold")  # pragma: no cover
-            nodes.append(np.asarray(halo.recv[r], np.int64))
-            ptrs.append(ptr[1:] + ptrs[-1][-1])
-            cols.append(J.astype(np.int64))
+            J = np.minimum(np.searchsorted(coarse_gid, gcols), max(len(coarse_gid) - 1, 0))
+            held = (coarse_gid[J] == gcols) if len(coarse_gid) else np.zeros(len(gcols), bool)
+            counts = np.diff(ptr)
+            row_of = np.repeat(np.arange(len(counts)), counts)
+            keep_row = np.ones(len(counts), bool)
+            keep_row[row_of[~held]] = False
+            keep_block = keep_row[row_of]
+            T.kept_blocks[r] = keep_block
+            nodes.append(np.asarray(halo.recv[r], np.int64)[keep_row])
+            ptrs.append(np.cumsum(counts[keep_row]) + ptrs[-1][-1])
+            cols.append(J[keep_block].astype(np.int64))
         T.set_ghost_pattern(np.concatenate(nodes), np.concatenate(ptrs), np.concatenate(cols))
     got = comm.alltoall([T.z_values(halo.send[r]) if r in halo.send else None for r in range(comm.size)])
     if halo.sources:
+        values = []
+        for r in halo.sources:
+            keep = T.kept_blocks[r]
+            blocks = np.asarray(got[r]).reshape(len(keep), -1)
+            values.append(blocks[keep].ravel())
         T.set_ghost_values(np.concatenate([halo.recv[r] for r in halo.sources]).astype(np.int64),
-                           np.concatenate([got[r].ravel() for r in halo.sources]))
+                           np.concatenate(values))
 
 
 def galerkin_rows(comm, fine_level, coarse_level, T, rows, d: int, A=None, mask=None, hess_nodes=None, hess=None,
