@@ -31,6 +31,20 @@
 
 namespace cmg {
 
+// Each pivot against its own row's diagonal entry, not against the largest pivot: the friction
+// Hessian s (I - t t^T)/|u_T| of a node that has just begun to slide (a load step's tiny slip
+// increment) put entries of 1e12 on the coarsest diagonal next to entries of 1e2 (largest pivot
+// 4e17, smallest 11.5), and that positive definite matrix was refused as singular (the 8-layer
+// cork's load path, step 2).
+inline bool ldlt_pivots_ok(const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>& f, const Eigen::VectorXd& diag) {
+  if (f.info() != Eigen::Success) return false;
+  const auto D = f.vectorD();
+  const auto& to = f.permutationP().indices();  // row i of S is row to[i] of the factor
+  for (Index i = 0; i < (Index)diag.size(); ++i)
+    if (!(D[to[i]] > 1e-13 * diag[i])) return false;
+  return true;
+}
+
 class CoarsestSolver {
  public:
   using SpMat = Eigen::SparseMatrix<double>;

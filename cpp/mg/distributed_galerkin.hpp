@@ -494,23 +494,14 @@ class GatheredCoarsestFactor {
     const Eigen::VectorXd diag = S.diagonal();
     f.compute(S);  // its lower triangle
     shifted_ = false;
-    if (!ok(f, diag)) {
+    if (!ldlt_pivots_ok(f, diag)) {
       for (Index k = 0; k < S.rows(); ++k) S.coeffRef(k, k) *= 1 + 1e-10;
       f.compute(S);
       shifted_ = true;
-      if (!ok(f, diag)) throw InputError("the coarsest-level matrix is singular: is rigid-body motion left free by the Dirichlet conditions?");
+      if (!ldlt_pivots_ok(f, diag)) throw InputError("the coarsest-level matrix is singular: is rigid-body motion left free by the Dirichlet conditions?");
     }
     factor_entries_ = (std::size_t)f.matrixL().nestedExpression().nonZeros();
     return shifted_ ? 2 : 1;
-  }
-
-  static bool ok(const LDLT& f, const Eigen::VectorXd& diag) {
-    if (f.info() != Eigen::Success) return false;
-    const auto D = f.vectorD();
-    const auto& to = f.permutationP().indices();  // row i of S is row to[i] of the factor
-    for (Index i = 0; i < (Index)diag.size(); ++i)
-      if (!(D[to[i]] > 1e-13 * diag[i])) return false;
-    return true;
   }
 
   CoarsestSolver solver_;

@@ -296,29 +296,15 @@ class GalerkinHierarchy {
     // coarsest matrix is small, so it is analysed every time.
     f.compute(S);
     const Eigen::VectorXd diag = S.diagonal();
-    if (factorization_ok(f, diag)) return 1;
+    if (ldlt_pivots_ok(f, diag)) return 1;
     // Truncation through rotated fine frames can make coarse dofs linearly dependent: the Galerkin
     // matrix is then only semi-definite, with a right-hand side P~^T r in its range. Solving with
     // A + eps diag(A) still lowers the energy (J(x) = -x^T A x / 2 - eps x^T D x <= 0).
     for (Index k = 0; k < n; ++k) S.coeffRef(k, k) *= 1 + 1e-10;
     f.compute(S);
-    if (!factorization_ok(f, diag))
+    if (!ldlt_pivots_ok(f, diag))
       throw InputError("the coarsest-level matrix is singular: is rigid-body motion left free by the Dirichlet conditions?");
     return 2;
-  }
-
-  // Each pivot against its own row's diagonal entry, not against the largest pivot: the friction
-  // Hessian s (I - t t^T)/|u_T| of a node that has just begun to slide (a load step's tiny slip
-  // increment) put entries of 1e12 on the coarsest diagonal next to entries of 1e2 (largest pivot
-  // 4e17, smallest 11.5), and that positive definite matrix was refused as singular (the 8-layer
-  // cork's load path, step 2).
-  static bool factorization_ok(const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>& f, const Eigen::VectorXd& diag) {
-    if (f.info() != Eigen::Success) return false;
-    const auto D = f.vectorD();
-    const auto& to = f.permutationP().indices();  // row i of S is row to[i] of the factor
-    for (Index i = 0; i < (Index)diag.size(); ++i)
-      if (!(D[to[i]] > 1e-13 * diag[i])) return false;
-    return true;
   }
 
   std::vector<Prolongation<d>> P_;
