@@ -25,6 +25,7 @@ class DistributedAnderson:
         self.reset()
 
     def reset(self) -> None:
+        """Forget the history and the last iterate (a new contact state, or a step that did not help)."""
         self.pairs: List[Tuple[np.ndarray, np.ndarray]] = []  # (dx, dg), oldest first
         self.gram: List[List[float]] = []  # dg_a . dg_b
         self.rhs: List[float] = []
