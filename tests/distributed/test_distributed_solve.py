@@ -111,6 +111,10 @@ def test_commands_on_two_ranks_report_the_serial_keys():
         if name == "sphere":
             assert dist["central_pressure"] == pytest.approx(serial["central_pressure"], rel=1e-8)
     assert json.load(open(f"{folder}/hertz.json"))["slip_nodes"] > 0  # Coulomb with sliding nodes
+    # in the distributed colours (--ordering hashed) the one-process command takes the same cycles
+    hashed = f"{folder}/hertz-hashed.json"
+    assert cli_main(["hertz", "--levels", "4", "--friction", "0.4", "--ordering", "hashed", "--json", hashed, "-q"]) == 0
+    assert json.load(open(hashed))["cycles"] == json.load(open(f"{folder}/hertz.json"))["cycles"]
     # the gathered .vtu: the serial mesh's points, the displacement in global components
     m = meshio.read(f"{folder}/hertz.vtu")
     assert m.point_data["displacement"].shape[0] == json.loads(open(f"{folder}/hertz.json").read())["nodes"]

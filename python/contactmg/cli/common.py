@@ -121,9 +121,9 @@ def add_thread_options(p) -> None:
     """Add --threads and --ordering to a command's parser."""
     p.add_argument("--threads", type=_positive_int("--threads", 0, 4096), default=0,
                    help="threads of the sweeps and products (default 0: all cores; the result does not depend on it)")
-    p.add_argument("--ordering", choices=["lexicographic", "coloured"], default=None,
-                   help="Gauss-Seidel order: colours of the block graph (parallel; the levels stored by colours) "
-                        "or lexicographic (default: the problem's, coloured)")
+    p.add_argument("--ordering", choices=["lexicographic", "coloured", "hashed"], default=None,
+                   help="Gauss-Seidel order: colours of the block graph (parallel; the levels stored by colours), "
+                        "lexicographic, or hashed (the colours of a run on MPI ranks) (default: the problem's, coloured)")
 
 
 def use_ordering(problem, args) -> None:
