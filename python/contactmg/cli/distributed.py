@@ -83,7 +83,7 @@ def run(args) -> int:
         "contact_halfwidth": result.contact_halfwidth, "stick_halfwidth": result.stick_halfwidth,
         "reaction": [float(v) for v in result.reaction], "max_normal_stress": result.max_normal_stress,
         "coarse_rebuilds": result.rebuilds, "cycle_type": f"{args.cycle}({args.nu1},{args.nu2})", "peak_rss_mb": rss, "threads": 1,
-        "ordering": "hashed colours", "hierarchy": "uniform",
+        "ordering": "hashed", "hierarchy": "uniform",
         "ranks": comm.size, "rank_solve_seconds": seconds, "rank_memory_bytes": memory,
         "phase_seconds": result.phase_seconds,
     }
