@@ -236,8 +236,11 @@ void bind_local(py::module_& m) {
            "per node whether it admits y")
       .def("frames", &L::frames, "the contact frames Q (nc, d, d): local = Q^T canonical")
       .def("to_canonical", &L::to_canonical, py::arg("u"))
-      .def_property_readonly("matrix", [](const L& l) { return std::make_shared<BM>(l.P.matrix()); },
-                             "T^T A T with the Dirichlet rows and columns eliminated")
+      // a view, not a copy: the Galerkin kernel reads it at every rebuild (every cycle under 3D
+      // Coulomb friction, where a copy of the fine matrix per cycle showed)
+      .def_property_readonly("matrix", [](const L& l) -> const BM& { return l.P.matrix(); },
+                             py::return_value_policy::reference_internal,
+                             "T^T A T with the Dirichlet rows and columns eliminated (read-only view)")
       .def_property_readonly("load", [](const L& l) { return to_numpy(l.P.load(), {(py::ssize_t)l.n(), d}); })
       .def_property_readonly("base_mask", [](const L& l) { return to_numpy(l.P.base_mask(), {(py::ssize_t)l.n(), d}); });
   using S = LocalLevelSmoother<d>;

@@ -155,8 +155,7 @@ class CoarseCorrection:
         not change since the last build are kept (they would get the same bits). Collective."""
         d, top = self.d, len(self.levels) - 1
         C = self.levels[top]
-        # the fine level's BlockMatrix is a copy the core hands out: taken per build and dropped, not a
-        # second fine matrix held for the whole solve
+        # the fine level's own BlockMatrix (a view): no second fine matrix
         galerkin_rows(self.comm, fine.level, C.level, self.fine_transfer, C.rows, d, A=fine.core.matrix,
                       mask=mask, hess_nodes=hess_nodes, hess=hess)
         C.refresh()
@@ -368,7 +367,9 @@ class DistributedMonotoneStep:
         mask, lo, hi, hess_nodes, hess, bounded, r = self.linearize(u)
         lap("linearize")
         key = (mask, hess_nodes, hess)
-        state_changed = _any(self.comm, self.built is None or not np.array_equal(mask, self.built[0]))
+        # a new truncation restarts the Anderson history (Coulomb only)
+        state_changed = self.anderson is not None and _any(
+            self.comm, self.built is None or not np.array_equal(mask, self.built[0]))
         changed = self.built is None or not (np.array_equal(mask, self.built[0]) and np.array_equal(hess_nodes, self.built[1])
                                              and np.array_equal(hess, self.built[2]))
         if _any(self.comm, changed):
