@@ -86,7 +86,7 @@ void bind_levels(py::module_& m) {
       .def_property_readonly("changed", [](const C& c) { return to_numpy(c.changed, {(py::ssize_t)c.changed.size()}); },
                              "per row: whether the last Galerkin pass changed its values");
 
-  py::class_<T, std::shared_ptr<T>>(m, ("DistributedTransfer" + sfx).c_str(), py::dynamic_attr(),
+  py::class_<T, std::shared_ptr<T>>(m, ("DistributedTransfer" + sfx).c_str(),
                                     "The transfer onto one rank's fine nodes from the coarse level's, and the Galerkin rows it forms")
       .def(py::init([](const BM& P, const BArr& owned_fine, const BArr& owned_coarse) {
              return std::make_shared<T>(P, flags(owned_fine, P.rows, "owned_fine"), flags(owned_coarse, P.cols, "owned_coarse"));
@@ -95,37 +95,50 @@ void bind_levels(py::module_& m) {
       .def_property_readonly("coarse_nodes", &T::coarse_nodes)
       .def_property_readonly("has_ghost_pattern", &T::has_ghost_pattern)
       .def("memory_bytes", &T::bytes)
-      .def("form_owned_z", [](T& t, const BM& A, const BArr& mask, const IArr& hess_nodes, const DArr& hess) {
+      .def("set_fine", [](T& t, const BM& A, const BArr& mask, const IArr& hess_nodes, const DArr& hess) {
              if (mask.size() != A.rows * d) throw InputError("the mask needs one entry per fine dof");
              require_shape(hess, "hess", {(py::ssize_t)hess_nodes.size(), d, d});
              const std::vector<Index> hn = index_list(hess_nodes);
              py::gil_scoped_release free;
-             t.form_owned_z(A, mask.data(), hn, hess.data(), nullptr);
+             t.set_fine(A, mask.data(), hn, hess.data(), nullptr);
            }, py::arg("A"), py::arg("mask"), py::arg("hess_nodes"), py::arg("hess"),
-           "Z = (M A M) P on the owned fine rows, A with the Hessian blocks at hess_nodes; only rows whose inputs changed")
-      .def("form_owned_z_from", [](T& t, const C& above) {
+           "the inputs of the next Galerkin rows: the fine matrix, the mask per fine dof and Hessian blocks at hess_nodes")
+      .def("set_fine", [](T& t, const C& above) {
              py::gil_scoped_release free;
-             t.form_owned_z(above.A, nullptr, {}, nullptr, above.changed.empty() ? nullptr : above.changed.data());
-           }, py::arg("rows"), "Z = A P on the owned fine rows for a coarse level's rows (recomputed where they changed)")
-      .def("z_pattern", [](const T& t, const IArr& nodes) {
-             auto pc = t.z_pattern(index_list(nodes));
+             t.set_fine(above.A, nullptr, {}, nullptr, above.changed.empty() ? nullptr : above.changed.data());
+           }, py::arg("rows"), "the inputs of the next Galerkin rows: a coarse level's rows (no mask)")
+      .def("z_pattern", [](const T& t, const BM& A, const IArr& nodes) {
+             auto pc = t.z_pattern(A, index_list(nodes));
              return py::make_tuple(to_numpy(pc.first, {(py::ssize_t)pc.first.size()}), to_numpy(pc.second, {(py::ssize_t)pc.second.size()}));
-           }, py::arg("nodes"), "(block-row pointer, local coarse columns) of the owned Z rows of nodes")
-      .def("z_values", [](const T& t, const IArr& nodes) {
-             std::vector<double> v = t.z_values(index_list(nodes));
+           }, py::arg("A"), py::arg("nodes"), "(block-row pointer, local coarse columns) of the owned Z rows of nodes")
+      .def("z_pattern", [](const T& t, const C& above, const IArr& nodes) {
+             auto pc = t.z_pattern(above.A, index_list(nodes));
+             return py::make_tuple(to_numpy(pc.first, {(py::ssize_t)pc.first.size()}), to_numpy(pc.second, {(py::ssize_t)pc.second.size()}));
+           }, py::arg("rows"), py::arg("nodes"))
+      .def("z_values", [](const T& t, const BM& A, const IArr& nodes) {
+             std::vector<double> v = t.z_values(A, index_list(nodes));
              const py::ssize_t k = (py::ssize_t)v.size() / (d * d);
              return moved_to_numpy(std::move(v), {k, d, d});
-           }, py::arg("nodes"), "the blocks of the owned Z rows of nodes (k, d, d)")
+           }, py::arg("A"), py::arg("nodes"), "the blocks of the owned Z rows of nodes (k, d, d)")
+      .def("z_values", [](const T& t, const C& above, const IArr& nodes) {
+             std::vector<double> v = t.z_values(above.A, index_list(nodes));
+             const py::ssize_t k = (py::ssize_t)v.size() / (d * d);
+             return moved_to_numpy(std::move(v), {k, d, d});
+           }, py::arg("rows"), py::arg("nodes"))
       .def("set_ghost_pattern", [](T& t, const IArr& nodes, const IArr& ptr, const IArr& cols) {
              t.set_ghost_pattern(index_list(nodes), index_list(ptr), index_list(cols));
-           }, py::arg("nodes"), py::arg("ptr"), py::arg("cols"), "every ghost Z row's pattern (local coarse columns), once")
-      .def("set_ghost_values", [](T& t, const IArr& nodes, const DArr& values) {
-             t.set_ghost_values(index_list(nodes), values.data(), (Index)values.size());
-           }, py::arg("nodes"), py::arg("values"), "the ghost Z rows' blocks from their owners")
-      .def("form_coarse", [](T& t, C& rows) {
+           }, py::arg("nodes"), py::arg("ptr"), py::arg("cols"),
+           "the ghost Z rows' patterns as sent (local coarse columns, -1: not held, the row left out), once")
+      .def("set_ghost_values", [](T& t, const DArr& values) { t.set_ghost_values(values.data(), (Index)values.size()); },
+           py::arg("values"), "the ghost Z rows' blocks from their owners, in the pattern's order")
+      .def("form_coarse", [](T& t, const BM& A, C& rows) {
              py::gil_scoped_release free;
-             t.form_coarse(rows);
-           }, py::arg("rows"), "the owned coarse rows P^T Z into rows (recomputed where a Z row changed)")
+             t.form_coarse(A, rows);
+           }, py::arg("A"), py::arg("rows"), "the owned coarse rows P^T Z into rows (formed again where a Z row changed)")
+      .def("form_coarse", [](T& t, const C& above, C& rows) {
+             py::gil_scoped_release free;
+             t.form_coarse(above.A, rows);
+           }, py::arg("above"), py::arg("rows"))
       .def("restrict_residual", [](const T& t, const DArr& r, py::object mask) {
              require_shape(r, "r", {(py::ssize_t)t.fine_nodes(), d});
              BArr keep;

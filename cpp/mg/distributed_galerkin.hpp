@@ -58,60 +58,68 @@ struct CoarseRows {
 };
 
 // The transfer P onto the local fine nodes (rows; ghost rows are their owners' rows) from the local
-// coarse nodes (columns), d x d blocks, and the Galerkin rows it forms on the coarse level:
-// Z = (M A M) P on the owned fine rows, Z's ghost rows from their owners (set_ghost_*), then for each
-// owned coarse row I the sum over its fine rows i in ascending index of P_iI^T Z_i.
+// coarse nodes (columns), and the Galerkin rows it forms on the coarse level: for each owned coarse
+// row I, the sum over its fine rows i in ascending index of P_iI^T Z_i with Z_i = ((M A M) P)_i. An
+// owned fine row's Z_i is formed where it is needed, from the fine matrix; a ghost row's comes from
+// its owner (set_ghost_*) and is the only Z row held, so the Galerkin kernel holds a halo's worth of
+// blocks, not a second fine matrix (docs/dev/decisions/0030-distributed-cycle.md).
 //
-// Patterns once, values per rebuild, and only where an input changed: a Z row is recomputed when the
-// mask of its row or of a neighbour, its Hessian block or its row of A changed; a coarse row when one
-// of its fine Z rows changed. A recomputed row is formed exactly as in a full pass, so the values are
-// those of a full rebuild bit for bit (the serial hierarchy's incremental update adds differences
-// instead, which rounds otherwise and would tie the bits to the history of truncations).
+// P is held as the serial Prolongation holds it: a weight per entry where a row's blocks are w I
+// (every row of uniform refinement), full d x d blocks only on the other rows (contact frames). A
+// kernel reads a plain entry as w I: the same bits as the full block up to the sign of a zero.
+//
+// A rebuild forms a coarse row again only when one of its fine rows' inputs changed (the mask of the
+// row or of a neighbour, its Hessian block, its row of A, or a ghost Z row's bits); a row formed
+// again is formed exactly as in a full pass, so the values are those of a full rebuild bit for bit
+// (the serial hierarchy's incremental update adds differences instead, which rounds otherwise and
+// would tie the bits to the history of truncations).
 template <int d>
 class DistributedTransfer {
  public:
-  DistributedTransfer(BlockMatrix<d> P, std::vector<std::uint8_t> owned_fine, std::vector<std::uint8_t> owned_coarse)
-      : P_(std::move(P)), owned_f_(std::move(owned_fine)), owned_c_(std::move(owned_coarse)) {
-    if ((Index)owned_f_.size() != P_.rows || (Index)owned_c_.size() != P_.cols)
+  DistributedTransfer(const BlockMatrix<d>& P, std::vector<std::uint8_t> owned_fine, std::vector<std::uint8_t> owned_coarse)
+      : rows_(P.rows), cols_(P.cols), ptr_(P.indptr), col_(P.indices), owned_f_(std::move(owned_fine)), owned_c_(std::move(owned_coarse)) {
+    if ((Index)owned_f_.size() != rows_ || (Index)owned_c_.size() != cols_)
       throw InputError("the ownership flags must have one entry per fine and per coarse node");
-    // P's columns row by row: for coarse node I, its fine rows ascending and the block of each
-    tptr_.assign(P_.cols + 1, 0);
-    for (Index k = 0; k < P_.nnz(); ++k) tptr_[P_.indices[k] + 1]++;
-    for (Index I = 0; I < P_.cols; ++I) tptr_[I + 1] += tptr_[I];
-    trow_.resize(P_.nnz());
-    tpos_.resize(P_.nnz());
-    std::vector<Index> fill(tptr_.begin(), tptr_.end() - 1);
-    for (Index i = 0; i < P_.rows; ++i)
-      for (Index k = P_.indptr[i]; k < P_.indptr[i + 1]; ++k) {
-        const Index q = fill[P_.indices[k]]++;
-        trow_[q] = i;
-        tpos_[q] = k;
+    w_.assign(P.nnz(), 0.0);
+    for (Index i = 0; i < rows_; ++i) {
+      bool plain = true;
+      for (Index k = ptr_[i]; k < ptr_[i + 1] && plain; ++k) plain = is_scaled_identity(P.block(k));
+      if (plain) {
+        for (Index k = ptr_[i]; k < ptr_[i + 1]; ++k) w_[k] = P.block(k)(0, 0);
+        continue;
       }
+      if (full_at_.empty()) full_at_.assign(rows_, -1);
+      if (full_.size() / (d * d) >= (std::size_t)std::numeric_limits<std::int32_t>::max())
+        throw InputError("a transfer has too many full blocks");
+      full_at_[i] = (std::int32_t)(full_.size() / (d * d));
+      for (Index k = ptr_[i]; k < ptr_[i + 1]; ++k) full_.insert(full_.end(), P.values.begin() + k * d * d, P.values.begin() + (k + 1) * d * d);
+    }
+    z_changed_.assign(rows_, 1);
   }
 
-  Index fine_nodes() const { return P_.rows; }
-  Index coarse_nodes() const { return P_.cols; }
-  const BlockMatrix<d>& matrix() const { return P_; }
+  Index fine_nodes() const { return rows_; }
+  Index coarse_nodes() const { return cols_; }
   bool has_ghost_pattern() const { return ghost_pattern_done_; }
 
   // ---- the Galerkin rows -------------------------------------------------------------------------
 
-  // Z's owned rows for the fine matrix A (owned rows complete), the mask per fine dof (nullptr: all
-  // ones), Hessian blocks added to the diagonal blocks of `hess_nodes`, and the rows of A
-  // whose values changed since the last call (nullptr: none; ignored on the first call).
-  void form_owned_z(const BlockMatrix<d>& A, const std::uint8_t* mask, const std::vector<Index>& hess_nodes, const double* hess,
-                    const std::uint8_t* a_changed) {
-    if (A.rows != P_.rows) throw InputError("the fine matrix and the transfer have different numbers of fine nodes");
-    const Index n = P_.rows;
-    const bool first = !owned_pattern_done_;
-    if (first) owned_pattern(A);
-    // which owned rows to recompute
-    std::vector<std::uint8_t> dirty(n, first ? 1 : 0);
-    std::vector<Index> hess_at(n, -1);
+  // The inputs of the next Galerkin rows: the fine matrix A (owned rows complete), the mask per fine
+  // dof (nullptr: all ones), Hessian blocks added to the diagonal blocks of `hess_nodes`, and the rows
+  // of A whose values changed since the last call (nullptr: none; ignored on the first call). Marks
+  // the owned fine rows whose Z row these inputs change.
+  void set_fine(const BlockMatrix<d>& A, const std::uint8_t* mask, const std::vector<Index>& hess_nodes, const double* hess,
+                const std::uint8_t* a_changed) {
+    check_fine(A);
+    const Index n = rows_;
+    const bool first = !inputs_set_;
+    std::vector<std::int32_t> hess_at(hess_nodes.empty() ? 0 : n, -1);  // empty: no Hessian block
     for (std::size_t m = 0; m < hess_nodes.size(); ++m) {
       if (hess_nodes[m] < 0 || hess_nodes[m] >= n) throw InputError("a Hessian node is outside the level");
-      hess_at[hess_nodes[m]] = (Index)m;
+      if (hess_at[hess_nodes[m]] >= 0) throw InputError("a Hessian node is given twice");
+      hess_at[hess_nodes[m]] = (std::int32_t)m;
     }
+    for (Index i = 0; i < n; ++i)
+      if (owned_f_[i]) z_changed_[i] = first;
     if (!first) {
       std::vector<std::uint8_t> mask_moved(n, 0);
       for (Index i = 0; i < n; ++i)
@@ -119,164 +127,169 @@ class DistributedTransfer {
           if ((mask ? mask[i * d + c] : 1) != mask_[i * d + c]) mask_moved[i] = 1;
       for (Index i = 0; i < n; ++i) {
         if (!owned_f_[i]) continue;
-        if (mask_moved[i] || (a_changed && a_changed[i])) { dirty[i] = 1; continue; }
-        for (Index k = A.indptr[i]; k < A.indptr[i + 1] && !dirty[i]; ++k)
-          if (mask_moved[A.indices[k]]) dirty[i] = 1;
+        if (mask_moved[i] || (a_changed && a_changed[i])) { z_changed_[i] = 1; continue; }
+        for (Index k = A.indptr[i]; k < A.indptr[i + 1] && !z_changed_[i]; ++k)
+          if (mask_moved[A.indices[k]]) z_changed_[i] = 1;
       }
       // a Hessian block that appeared, vanished or changed
       for (std::size_t m = 0; m < hess_nodes_.size(); ++m) {
         const Index i = hess_nodes_[m];
-        const Index now = hess_at[i];
-        if (now < 0 || std::memcmp(hess + now * d * d, hess_.data() + m * d * d, sizeof(double) * d * d) != 0) dirty[i] = 1;
+        const Index now = hess_at.empty() ? -1 : hess_at[i];
+        if (now < 0 || std::memcmp(hess + now * d * d, hess_.data() + m * d * d, sizeof(double) * d * d) != 0) z_changed_[i] = 1;
       }
       std::vector<std::uint8_t> had(n, 0);
       for (Index i : hess_nodes_) had[i] = 1;
       for (Index i : hess_nodes)
-        if (!had[i]) dirty[i] = 1;
+        if (!had[i]) z_changed_[i] = 1;
     }
     mask_.resize(n * d);
     for (Index q = 0; q < n * d; ++q) mask_[q] = mask ? mask[q] : 1;
     hess_nodes_ = hess_nodes;
     hess_.assign(hess, hess + hess_nodes.size() * d * d);
-
-    z_changed_.assign(n, first ? 1 : 0);
-    std::vector<double> row;
-    std::vector<Index> pos(P_.cols, -1);
-    for (Index i = 0; i < n; ++i) {
-      if (!owned_f_[i] || !dirty[i]) continue;
-      const Index z0 = zptr_[i], z1 = zptr_[i + 1];
-      row.assign((z1 - z0) * d * d, 0.0);
-      for (Index k = z0; k < z1; ++k) pos[zcol_[k]] = k - z0;
-      for (Index k = A.indptr[i]; k < A.indptr[i + 1]; ++k) {
-        const Index j = A.indices[k];
-        // Y = M_i (A_ij + H_i [i == j]) M_j; the mask is 0/1, so these products are exact
-        Mat<d> Y = A.block(k);
-        if (j == i && hess_at[i] >= 0) Y += CMatMap<d>(hess + hess_at[i] * d * d);
-        for (int a = 0; a < d; ++a)
-          for (int c = 0; c < d; ++c)
-            if (!mask_[i * d + a] || !mask_[j * d + c]) Y(a, c) = 0.0;
-        if (Y.isZero(0.0)) continue;
-        for (Index b = P_.indptr[j]; b < P_.indptr[j + 1]; ++b) {
-          MatMap<d> Zb(row.data() + pos[P_.indices[b]] * d * d);
-          multiply_add(Y, P_.block(b), Zb);
-        }
-      }
-      double* stored = zval_.data() + z0 * d * d;
-      if (first || std::memcmp(stored, row.data(), sizeof(double) * row.size()) != 0) {
-        std::copy(row.begin(), row.end(), stored);
-        z_changed_[i] = 1;
-      }
-    }
+    hess_at_.swap(hess_at);
+    inputs_set_ = true;
   }
 
   // The owned Z rows of `nodes` (to their ghosts' ranks): (block-row pointer, local coarse column of
-  // each block) once, the blocks (k, d, d) per rebuild.
-  std::pair<std::vector<Index>, std::vector<Index>> z_pattern(const std::vector<Index>& nodes) const {
+  // each block) once, the blocks (k, d, d) per rebuild, for the A of the last set_fine.
+  std::pair<std::vector<Index>, std::vector<Index>> z_pattern(const BlockMatrix<d>& A, const std::vector<Index>& nodes) const {
+    check_fine(A);
     std::vector<Index> ptr{0}, cols;
+    std::vector<ColIndex> row;
+    std::vector<Index> slot(cols_, -1);
     for (Index i : nodes) {
       check_node(i, true);
-      for (Index k = zptr_[i]; k < zptr_[i + 1]; ++k) cols.push_back(zcol_[k]);
+      z_columns(A, i, row, slot);
+      cols.insert(cols.end(), row.begin(), row.end());
       ptr.push_back((Index)cols.size());
     }
     return {ptr, cols};
   }
-  std::vector<double> z_values(const std::vector<Index>& nodes) const {
-    std::vector<double> out;
+  std::vector<double> z_values(const BlockMatrix<d>& A, const std::vector<Index>& nodes) const {
+    check_fine(A);
+    if (!inputs_set_) throw InputError("z_values before set_fine");
+    std::vector<double> out, vals;
+    std::vector<ColIndex> row;
+    std::vector<Index> slot(cols_, -1);
     for (Index i : nodes) {
       check_node(i, true);
-      out.insert(out.end(), zval_.begin() + zptr_[i] * d * d, zval_.begin() + zptr_[i + 1] * d * d);
+      z_row(A, i, row, vals, slot);
+      out.insert(out.end(), vals.begin(), vals.end());
     }
     return out;
   }
 
-  // The patterns of every ghost Z row (nodes: the ghosts, ptr/cols: their blocks' local coarse
-  // columns, ascending per row), once, after the first form_owned_z; the coarse pattern follows.
+  // The patterns of the ghost Z rows as their owners sent them (nodes: ghosts, ptr/cols: their
+  // blocks' local coarse columns, ascending per row, -1 for a coarse node this rank does not hold),
+  // once. A row reaching a coarse node not held is left out: no owned coarse row sums it. (If an owned
+  // coarse node J has P_iJ != 0, every column K of Z_i shares a coarse cell with J: the fine cell of i
+  // and a neighbour j lies in one coarse cell, whose vertices are J (the smallest face holding i has J)
+  // and K (P_jK != 0), so K is held. A ghost at the edge of the layer may have such a row; it is sent
+  // because the halo sends every ghost its owner's values.)
   void set_ghost_pattern(const std::vector<Index>& nodes, const std::vector<Index>& ptr, const std::vector<Index>& cols) {
-    if (!owned_pattern_done_) throw InputError("set_ghost_pattern before the owned Z rows are formed");
     if (ghost_pattern_done_) throw InputError("the ghost Z pattern is set once");
-    if (ptr.size() != nodes.size() + 1 || ptr.back() != (Index)cols.size()) throw InputError("a ghost Z pattern is malformed");
-    const Index n = P_.rows;
-    std::vector<Index> count(n, 0), at(n, -1);
-    for (Index i = 0; i < n; ++i)
-      if (owned_f_[i]) count[i] = zptr_[i + 1] - zptr_[i];
+    if (ptr.size() != nodes.size() + 1 || ptr.front() != 0 || ptr.back() != (Index)cols.size()) throw InputError("a ghost Z pattern is malformed");
+    ghost_at_.assign(nodes.empty() ? 0 : rows_, -1);  // empty: no ghost row
+    gptr_.assign(1, 0);
+    gcol_.clear();
+    given_.clear();
     for (std::size_t m = 0; m < nodes.size(); ++m) {
       check_node(nodes[m], false);
-      at[nodes[m]] = (Index)m;
-      count[nodes[m]] = ptr[m + 1] - ptr[m];
-    }
-    std::vector<Index> zptr(n + 1, 0);
-    for (Index i = 0; i < n; ++i) zptr[i + 1] = zptr[i] + count[i];
-    std::vector<ColIndex> zcol(zptr[n]);
-    std::vector<double> zval(zptr[n] * d * d, 0.0);
-    for (Index i = 0; i < n; ++i) {
-      if (owned_f_[i]) {
-        std::copy(zcol_.begin() + zptr_[i], zcol_.begin() + zptr_[i + 1], zcol.begin() + zptr[i]);
-        std::copy(zval_.begin() + zptr_[i] * d * d, zval_.begin() + zptr_[i + 1] * d * d, zval.begin() + zptr[i] * d * d);
-      } else if (at[i] >= 0) {
-        for (Index k = ptr[at[i]]; k < ptr[at[i] + 1]; ++k) {
-          if (cols[k] < 0 || cols[k] >= P_.cols || (k > ptr[at[i]] && cols[k] <= cols[k - 1]))
-            throw InputError("a ghost Z row's columns must be local coarse nodes, ascending");
-          zcol[zptr[i] + k - ptr[at[i]]] = (ColIndex)cols[k];
-        }
+      if (ghost_at_[nodes[m]] >= 0) throw InputError("a ghost Z row is given twice");
+      bool held = true;
+      for (Index k = ptr[m]; k < ptr[m + 1]; ++k) {
+        if (cols[k] < -1 || cols[k] >= cols_ || (k > ptr[m] && cols[k] >= 0 && cols[k] <= cols[k - 1]))
+          throw InputError("a ghost Z row's columns must be local coarse nodes (or -1), ascending");
+        held = held && cols[k] >= 0;
       }
+      given_.push_back({nodes[m], ptr[m + 1] - ptr[m], held});
+      if (!held) continue;
+      ghost_at_[nodes[m]] = (std::int32_t)(gptr_.size() - 1);
+      for (Index k = ptr[m]; k < ptr[m + 1]; ++k) gcol_.push_back((ColIndex)cols[k]);
+      gptr_.push_back((Index)gcol_.size());
     }
-    zptr_.swap(zptr);
-    zcol_.swap(zcol);
-    zval_.swap(zval);
+    gval_.assign(gcol_.size() * d * d, 0.0);
     ghost_pattern_done_ = true;
-    coarse_pattern();
   }
 
-  // The ghost Z rows' blocks (nodes and their blocks in the order of the pattern); a row whose bits
-  // differ from the stored ones is marked changed.
-  void set_ghost_values(const std::vector<Index>& nodes, const double* values, Index count) {
+  // The ghost Z rows' blocks, every row of the pattern in its order (the rows left out skipped); a
+  // row whose bits differ from the held ones is marked changed.
+  void set_ghost_values(const double* values, Index count) {
+    if (!ghost_pattern_done_) throw InputError("set_ghost_values before set_ghost_pattern");
     Index q = 0;
-    for (Index i : nodes) {
-      check_node(i, false);
-      const Index len = (zptr_[i + 1] - zptr_[i]) * d * d;
+    for (const Given& r : given_) {
+      const Index len = r.blocks * d * d;
       if (q + len > count) throw InputError("too few ghost Z values for the pattern");
-      double* stored = zval_.data() + zptr_[i] * d * d;
-      if (std::memcmp(stored, values + q, sizeof(double) * len) != 0) {
-        std::copy(values + q, values + q + len, stored);
-        z_changed_[i] = 1;
+      if (r.held) {
+        double* stored = gval_.data() + gptr_[ghost_at_[r.node]] * d * d;
+        if (std::memcmp(stored, values + q, sizeof(double) * len) != 0) {
+          std::copy(values + q, values + q + len, stored);
+          z_changed_[r.node] = 1;
+        }
       }
       q += len;
     }
     if (q != count) throw InputError("more ghost Z values than the pattern holds");
   }
 
-  // The owned coarse rows of C = P^T Z (ghost rows empty): row I is the sum over its fine rows i in
-  // ascending index of P_iI^T Z_i, recomputed where one of those Z rows changed; C.changed marks the
-  // rows whose bits changed.
-  void form_coarse(CoarseRows<d>& C) {
+  // The owned coarse rows of C = P^T Z into C (ghost rows empty), A the fine matrix of the last
+  // set_fine: row I is the sum over its fine rows i in ascending index of P_iI^T Z_i, formed again
+  // where one of those Z rows changed; C.changed marks the rows whose bits changed. The first call
+  // sets C's pattern: the columns of the Z rows of I's fine rows, and a diagonal slot (a row every
+  // fine row of which is truncated stays, inert).
+  void form_coarse(const BlockMatrix<d>& A, CoarseRows<d>& C) {
+    check_fine(A);
+    if (!inputs_set_) throw InputError("form_coarse before set_fine");
     if (!ghost_pattern_done_) throw InputError("form_coarse before the ghost Z pattern is set");
-    const Index nc = P_.cols;
-    const bool first = C.A.rows != nc || C.A.indptr != cptr_;
-    if (first) {
-      C.A.rows = C.A.cols = nc;
-      C.A.indptr = cptr_;
-      C.A.indices = ccol_;
-      C.A.values.assign(ccol_.size() * d * d, 0.0);
-      C.A.find_diagonal();
+    const Index nc = cols_;
+    // P's columns: for coarse node I, its fine rows ascending and the entry of each (formed per call,
+    // as the serial GalerkinProduct forms P's transposed pattern: one pass over P)
+    std::vector<Index> tptr(nc + 1, 0), trow(nnz()), tpos(nnz());
+    for (Index k = 0; k < nnz(); ++k) tptr[col_[k] + 1]++;
+    for (Index I = 0; I < nc; ++I) tptr[I + 1] += tptr[I];
+    {
+      std::vector<Index> fill(tptr.begin(), tptr.end() - 1);
+      for (Index i = 0; i < rows_; ++i)
+        for (Index k = ptr_[i]; k < ptr_[i + 1]; ++k) {
+          const Index q = fill[col_[k]]++;
+          trow[q] = i;
+          tpos[q] = k;
+        }
     }
+    std::vector<Index> slot(nc, -1);
+    std::vector<ColIndex> zc;
+    std::vector<double> zv;
+    const bool first = C.A.rows != nc;
+    if (first) coarse_pattern(A, tptr, trow, C, zc, slot);
     C.changed.assign(nc, first ? 1 : 0);
     std::vector<Index> pos(nc, -1);
     std::vector<double> row;
     for (Index I = 0; I < nc; ++I) {
       if (!owned_c_[I]) continue;
       bool dirty = first;
-      for (Index a = tptr_[I]; a < tptr_[I + 1] && !dirty; ++a) dirty = z_changed_[trow_[a]];
+      for (Index a = tptr[I]; a < tptr[I + 1] && !dirty; ++a) dirty = z_changed_[trow[a]];
       if (!dirty) continue;
-      const Index c0 = cptr_[I], c1 = cptr_[I + 1];
+      const Index c0 = C.A.indptr[I], c1 = C.A.indptr[I + 1];
       row.assign((c1 - c0) * d * d, 0.0);
-      for (Index k = c0; k < c1; ++k) pos[ccol_[k]] = k - c0;
-      for (Index a = tptr_[I]; a < tptr_[I + 1]; ++a) {
-        const Index i = trow_[a];
-        const Mat<d> PT = P_.block(tpos_[a]).transpose();
+      for (Index k = c0; k < c1; ++k) pos[C.A.indices[k]] = k - c0;
+      for (Index a = tptr[I]; a < tptr[I + 1]; ++a) {
+        const Index i = trow[a];
+        const Mat<d> PT = block(i, tpos[a]).transpose();
         if (PT.isZero(0.0)) continue;
-        for (Index k = zptr_[i]; k < zptr_[i + 1]; ++k) {
-          MatMap<d> Cb(row.data() + pos[zcol_[k]] * d * d);
-          multiply_add(PT, CMatMap<d>(zval_.data() + k * d * d), Cb);
+        const ColIndex* zcol;
+        const double* zval;
+        Index len;
+        if (owned_f_[i]) {
+          z_row(A, i, zc, zv, slot);
+          zcol = zc.data(), zval = zv.data(), len = (Index)zc.size();
+        } else {
+          const Index g = ghost_at_.empty() ? -1 : ghost_at_[i];
+          if (g < 0) continue;  // a ghost row left out reaches a coarse node this rank does not hold
+          zcol = gcol_.data() + gptr_[g], zval = gval_.data() + gptr_[g] * d * d, len = gptr_[g + 1] - gptr_[g];
+        }
+        for (Index k = 0; k < len; ++k) {
+          MatMap<d> Cb(row.data() + pos[zcol[k]] * d * d);
+          multiply_add(PT, CMatMap<d>(zval + k * d * d), Cb);
         }
       }
       double* stored = C.A.values.data() + c0 * d * d;
@@ -285,22 +298,29 @@ class DistributedTransfer {
         C.changed[I] = 1;
       }
     }
+    std::fill(z_changed_.begin(), z_changed_.end(), 0);
   }
 
   // ---- the transfers of the cycle -----------------------------------------------------------------
 
   // bc_I = sum_i P_iI^T (m_i r_i) over the fine rows i of I ascending, on the owned coarse rows (zero
-  // elsewhere); mask per fine dof or nullptr.
+  // elsewhere); mask per fine dof or nullptr. The fine rows are visited in ascending order and each
+  // adds into its coarse rows: every coarse row receives its terms in ascending fine row.
   void restrict_residual(const double* r, const std::uint8_t* mask, double* bc) const {
-    for (Index I = 0; I < P_.cols; ++I) {
-      double* out = bc + d * I;
-      std::fill(out, out + d, 0.0);
-      if (!owned_c_[I]) continue;
-      for (Index a = tptr_[I]; a < tptr_[I + 1]; ++a) {
-        const Index i = trow_[a];
-        const double* B = P_.values.data() + tpos_[a] * d * d;  // row-major P_iI: entry (c, e) at c * d + e
-        double ri[d];
-        for (int c = 0; c < d; ++c) ri[c] = mask && !mask[i * d + c] ? 0.0 : r[i * d + c];
+    std::fill(bc, bc + d * cols_, 0.0);
+    for (Index i = 0; i < rows_; ++i) {
+      double ri[d];
+      for (int c = 0; c < d; ++c) ri[c] = mask && !mask[i * d + c] ? 0.0 : r[i * d + c];
+      const double* F = full_row(i);
+      for (Index k = ptr_[i]; k < ptr_[i + 1]; ++k) {
+        const Index I = col_[k];
+        if (!owned_c_[I]) continue;
+        double* out = bc + d * I;
+        if (!F) {
+          for (int e = 0; e < d; ++e) out[e] += w_[k] * ri[e];
+          continue;
+        }
+        const double* B = F + (k - ptr_[i]) * d * d;  // row-major P_iI: entry (c, e) at c * d + e
         for (int e = 0; e < d; ++e) {
           double t = B[e] * ri[0];
           for (int c = 1; c < d; ++c) t += B[c * d + e] * ri[c];
@@ -313,9 +333,17 @@ class DistributedTransfer {
   // xf_i (+)= m_i sum_J P_iJ xc_J on every local fine row (ghost rows are their owners' rows, so no
   // exchange follows); add: into xf, else overwrite; mask per fine dof or nullptr.
   void prolong(const double* xc, const std::uint8_t* mask, double* xf, bool add) const {
-    for (Index i = 0; i < P_.rows; ++i) {
+    for (Index i = 0; i < rows_; ++i) {
       double t[d] = {};
-      accumulate_blocks<d, false>(P_.values.data(), P_.indices.data(), P_.indptr[i], P_.indptr[i + 1], xc, t);
+      const double* F = full_row(i);
+      if (F) {
+        accumulate_blocks<d, false>(F, col_.data() + ptr_[i], 0, ptr_[i + 1] - ptr_[i], xc, t);
+      } else {
+        for (Index k = ptr_[i]; k < ptr_[i + 1]; ++k) {
+          const double* x = xc + d * (Index)col_[k];
+          for (int c = 0; c < d; ++c) t[c] += w_[k] * x[c];
+        }
+      }
       for (int c = 0; c < d; ++c) {
         const double v = mask && !mask[i * d + c] ? 0.0 : t[c];
         xf[i * d + c] = add ? xf[i * d + c] + v : v;
@@ -329,24 +357,27 @@ class DistributedTransfer {
   // so the order does not matter; sigma sums a row's |w| in ascending coarse dof.
   void restrict_bounds(const double* lo, const double* hi, const double* x, const std::uint8_t* mask, const std::uint8_t* rows,
                        double* lo_c, double* hi_c) const {
-    std::fill(lo_c, lo_c + d * P_.cols, -kInf);
-    std::fill(hi_c, hi_c + d * P_.cols, kInf);
-    for (Index i = 0; i < P_.rows; ++i) {
+    std::fill(lo_c, lo_c + d * cols_, -kInf);
+    std::fill(hi_c, hi_c + d * cols_, kInf);
+    for (Index i = 0; i < rows_; ++i) {
       if (rows && !rows[i]) continue;
+      const double* F = full_row(i);
+      // entry (c, a) of the block of entry k on row i
+      const auto weight = [&](Index k, int c, int a) { return F ? F[(k - ptr_[i]) * d * d + c * d + a] : (c == a ? w_[k] : 0.0); };
       for (int c = 0; c < d; ++c) {
         double l = lo[i * d + c], h = hi[i * d + c];
         if ((mask && !mask[i * d + c]) || (l == -kInf && h == kInf)) continue;
         if (x) { l -= x[i * d + c]; h -= x[i * d + c]; }
         double sigma = 0;
-        for (Index k = P_.indptr[i]; k < P_.indptr[i + 1]; ++k)
-          for (int a = 0; a < d; ++a) sigma += std::abs(P_.values[k * d * d + c * d + a]);
+        for (Index k = ptr_[i]; k < ptr_[i + 1]; ++k)
+          for (int a = 0; a < d; ++a) sigma += std::abs(weight(k, c, a));
         const double scale = 1.0 / std::max(1.0, sigma);
         const double ls = l * scale, hs = h * scale;
-        for (Index k = P_.indptr[i]; k < P_.indptr[i + 1]; ++k)
+        for (Index k = ptr_[i]; k < ptr_[i + 1]; ++k)
           for (int a = 0; a < d; ++a) {
-            const double w = P_.values[k * d * d + c * d + a];
+            const double w = weight(k, c, a);
             if (w == 0) continue;
-            const Index g = P_.indices[k] * d + a;
+            const Index g = (Index)col_[k] * d + a;
             if (w > 0) { hi_c[g] = std::min(hi_c[g], hs); lo_c[g] = std::max(lo_c[g], ls); }
             else { hi_c[g] = std::min(hi_c[g], -ls); lo_c[g] = std::max(lo_c[g], -hs); }
           }
@@ -355,14 +386,35 @@ class DistributedTransfer {
   }
 
   std::size_t bytes() const {
-    return P_.indptr.size() * sizeof(Index) + P_.indices.size() * sizeof(ColIndex) + P_.values.size() * sizeof(double) +
-           P_.diag.size() * sizeof(Index) + (tptr_.size() + trow_.size() + tpos_.size()) * sizeof(Index) +
-           zptr_.size() * sizeof(Index) + zcol_.size() * sizeof(ColIndex) + zval_.size() * sizeof(double) + z_changed_.size() +
-           (cptr_.size()) * sizeof(Index) + ccol_.size() * sizeof(ColIndex) + mask_.size() + hess_nodes_.size() * sizeof(Index) +
-           hess_.size() * sizeof(double) + owned_f_.size() + owned_c_.size();
+    return ptr_.size() * sizeof(Index) + col_.size() * sizeof(ColIndex) + w_.size() * sizeof(double) + full_at_.size() * sizeof(std::int32_t) +
+           full_.size() * sizeof(double) + owned_f_.size() + owned_c_.size() + z_changed_.size() + mask_.size() +
+           hess_nodes_.size() * sizeof(Index) + hess_at_.size() * sizeof(std::int32_t) + hess_.size() * sizeof(double) +
+           ghost_at_.size() * sizeof(std::int32_t) +
+           gptr_.size() * sizeof(Index) + gcol_.size() * sizeof(ColIndex) + gval_.size() * sizeof(double) + given_.size() * sizeof(Given);
   }
 
  private:
+  Index nnz() const { return (Index)col_.size(); }
+
+  static bool is_scaled_identity(const Mat<d>& B) {
+    for (int a = 0; a < d; ++a)
+      for (int c = 0; c < d; ++c)
+        if (a == c ? std::memcmp(&B(a, a), &B(0, 0), sizeof(double)) != 0 : B(a, c) != 0.0) return false;
+    return true;
+  }
+
+  // the full blocks of row i (nullptr: a plain row, w I)
+  const double* full_row(Index i) const { return full_at_.empty() || full_at_[i] < 0 ? nullptr : full_.data() + full_at_[i] * d * d; }
+
+  // the block of entry k (on row i) as the d x d block P held it
+  Mat<d> block(Index i, Index k) const {
+    const double* F = full_row(i);
+    if (F) return Mat<d>(CMatMap<d>(F + (k - ptr_[i]) * d * d));
+    Mat<d> B = Mat<d>::Zero();
+    for (int a = 0; a < d; ++a) B(a, a) = w_[k];
+    return B;
+  }
+
   // Y += X B, the products of each entry summed over the inner index in ascending order (fixed code,
   // so the same bits on every rank).
   template <class MX, class MB, class MY>
@@ -375,73 +427,106 @@ class DistributedTransfer {
       }
   }
 
+  void check_fine(const BlockMatrix<d>& A) const {
+    if (A.rows != rows_) throw InputError("the fine matrix and the transfer have different numbers of fine nodes");
+  }
+
   void check_node(Index i, bool owned) const {
-    if (i < 0 || i >= P_.rows || (bool)owned_f_[i] != owned)
+    if (i < 0 || i >= rows_ || (bool)owned_f_[i] != owned)
       throw InputError(std::string("node ") + std::to_string(i) + " is not an " + (owned ? "owned" : "ghost") + " fine node");
   }
 
-  // The blocks of Z's owned rows: the coarse columns reached through A's row (pattern, not values,
-  // so the truncation never changes it); ghost rows empty until set_ghost_pattern.
-  void owned_pattern(const BlockMatrix<d>& A) {
-    const Index n = P_.rows;
-    zptr_.assign(n + 1, 0);
-    zcol_.clear();
-    std::vector<Index> marker(P_.cols, -1);
-    std::vector<ColIndex> row;
-    for (Index i = 0; i < n; ++i) {
-      row.clear();
-      if (owned_f_[i])
-        for (Index k = A.indptr[i]; k < A.indptr[i + 1]; ++k)
-          for (Index b = P_.indptr[A.indices[k]]; b < P_.indptr[A.indices[k] + 1]; ++b) {
-            const Index J = P_.indices[b];
-            if (marker[J] != i) { marker[J] = i; row.push_back((ColIndex)J); }
-          }
-      std::sort(row.begin(), row.end());
-      zcol_.insert(zcol_.end(), row.begin(), row.end());
-      zptr_[i + 1] = (Index)zcol_.size();
-    }
-    zval_.assign(zcol_.size() * d * d, 0.0);
-    mask_.assign(n * d, 1);
-    owned_pattern_done_ = true;
+  // The columns of owned row i of Z: the coarse nodes reached through A's row (its pattern, not its
+  // values, so the truncation never changes it), ascending. slot: -1 per coarse node, left so.
+  void z_columns(const BlockMatrix<d>& A, Index i, std::vector<ColIndex>& cols, std::vector<Index>& slot) const {
+    cols.clear();
+    for (Index k = A.indptr[i]; k < A.indptr[i + 1]; ++k)
+      for (Index b = ptr_[A.indices[k]]; b < ptr_[A.indices[k] + 1]; ++b)
+        if (slot[col_[b]] < 0) { slot[col_[b]] = 0; cols.push_back(col_[b]); }
+    for (ColIndex J : cols) slot[J] = -1;
+    std::sort(cols.begin(), cols.end());
   }
 
-  // The blocks of the owned coarse rows: the columns of the Z rows of their fine rows, and a
-  // diagonal slot (a row every fine row of which is truncated stays, inert).
-  void coarse_pattern() {
-    const Index nc = P_.cols;
-    cptr_.assign(nc + 1, 0);
-    ccol_.clear();
+  // Owned row i of Z = (M A M) P (with the Hessian block of the last set_fine): its columns
+  // (z_columns) and blocks, each the sum over A's row in ascending column of Y_ij P_jJ.
+  void z_row(const BlockMatrix<d>& A, Index i, std::vector<ColIndex>& cols, std::vector<double>& vals, std::vector<Index>& slot) const {
+    z_columns(A, i, cols, slot);
+    vals.assign(cols.size() * d * d, 0.0);
+    for (std::size_t m = 0; m < cols.size(); ++m) slot[cols[m]] = (Index)m;
+    for (Index k = A.indptr[i]; k < A.indptr[i + 1]; ++k) {
+      const Index j = A.indices[k];
+      // Y = M_i (A_ij + H_i [i == j]) M_j; the mask is 0/1, so these products are exact
+      Mat<d> Y = A.block(k);
+      if (j == i && !hess_at_.empty() && hess_at_[i] >= 0) Y += CMatMap<d>(hess_.data() + hess_at_[i] * d * d);
+      for (int a = 0; a < d; ++a)
+        for (int c = 0; c < d; ++c)
+          if (!mask_[i * d + a] || !mask_[j * d + c]) Y(a, c) = 0.0;
+      if (Y.isZero(0.0)) continue;
+      for (Index b = ptr_[j]; b < ptr_[j + 1]; ++b) {
+        MatMap<d> Zb(vals.data() + slot[col_[b]] * d * d);
+        multiply_add(Y, block(j, b), Zb);
+      }
+    }
+    for (ColIndex J : cols) slot[J] = -1;
+  }
+
+  // The pattern of C's owned rows into C.A (ghost rows empty), values zero.
+  void coarse_pattern(const BlockMatrix<d>& A, const std::vector<Index>& tptr, const std::vector<Index>& trow, CoarseRows<d>& C,
+                      std::vector<ColIndex>& zc, std::vector<Index>& slot) const {
+    const Index nc = cols_;
+    C.A.rows = C.A.cols = nc;
+    C.A.indptr.assign(nc + 1, 0);
+    C.A.indices.clear();
     std::vector<Index> marker(nc, -1);
     std::vector<ColIndex> row;
     for (Index I = 0; I < nc; ++I) {
       row.clear();
       if (owned_c_[I]) {
-        for (Index a = tptr_[I]; a < tptr_[I + 1]; ++a) {
-          const Index i = trow_[a];
-          for (Index k = zptr_[i]; k < zptr_[i + 1]; ++k)
-            if (marker[zcol_[k]] != I) { marker[zcol_[k]] = I; row.push_back(zcol_[k]); }
+        const auto add = [&](ColIndex J) {
+          if (marker[J] != I) { marker[J] = I; row.push_back(J); }
+        };
+        for (Index a = tptr[I]; a < tptr[I + 1]; ++a) {
+          const Index i = trow[a];
+          if (owned_f_[i]) {
+            z_columns(A, i, zc, slot);
+            for (ColIndex J : zc) add(J);
+          } else if (!ghost_at_.empty() && ghost_at_[i] >= 0) {
+            for (Index k = gptr_[ghost_at_[i]]; k < gptr_[ghost_at_[i] + 1]; ++k) add(gcol_[k]);
+          }
         }
-        if (marker[I] != I) row.push_back((ColIndex)I);
+        add((ColIndex)I);
       }
       std::sort(row.begin(), row.end());
-      ccol_.insert(ccol_.end(), row.begin(), row.end());
-      cptr_[I + 1] = (Index)ccol_.size();
+      C.A.indices.insert(C.A.indices.end(), row.begin(), row.end());
+      C.A.indptr[I + 1] = (Index)C.A.indices.size();
     }
+    C.A.indices.shrink_to_fit();
+    C.A.values.assign(C.A.indices.size() * d * d, 0.0);
+    C.A.find_diagonal();
   }
 
-  BlockMatrix<d> P_;
+  Index rows_, cols_;
+  std::vector<Index> ptr_;                       // P: rows_ + 1
+  std::vector<ColIndex> col_;                    // coarse node of each entry, ascending per row
+  std::vector<double> w_;                        // the weight of each entry of a plain row
+  std::vector<std::int32_t> full_at_;            // per row: its first block in full_, or -1 (empty: none)
+  std::vector<double> full_;                     // the blocks of the rows that are not w I
   std::vector<std::uint8_t> owned_f_, owned_c_;
-  std::vector<Index> tptr_, trow_, tpos_;        // P's columns: fine rows ascending per coarse node
-  std::vector<Index> zptr_;                      // Z = (M A M) P on every local fine row
-  std::vector<ColIndex> zcol_;
-  std::vector<double> zval_;
-  std::vector<std::uint8_t> z_changed_;
-  std::vector<Index> cptr_;                      // the pattern of the owned coarse rows
-  std::vector<ColIndex> ccol_;
-  std::vector<std::uint8_t> mask_;               // the inputs of the last pass (what a later pass compares)
+  std::vector<std::uint8_t> z_changed_;          // per fine row: its Z row changed since the last form_coarse
+  std::vector<std::uint8_t> mask_;               // the inputs of the last set_fine
   std::vector<Index> hess_nodes_;
+  std::vector<std::int32_t> hess_at_;            // per fine row: its Hessian block, or -1 (empty: none)
   std::vector<double> hess_;
-  bool owned_pattern_done_ = false, ghost_pattern_done_ = false;
+  std::vector<std::int32_t> ghost_at_;           // per fine row: its ghost Z row, or -1 (empty: none)
+  std::vector<Index> gptr_{0};                   // the ghost Z rows held
+  std::vector<ColIndex> gcol_;
+  std::vector<double> gval_;
+  struct Given {
+    Index node, blocks;
+    bool held;
+  };
+  std::vector<Given> given_;                     // the ghost rows as sent: node, blocks, whether held
+  bool inputs_set_ = false, ghost_pattern_done_ = false;
 };
 
 // The coarsest level gathered onto every rank (the same matrix everywhere), factorized by the

@@ -37,10 +37,11 @@ def kernel(P, d):
 
 def galerkin(T, A, mask, hess_nodes, hess, d):
     rows = (_core.CoarseRows2D if d == 2 else _core.CoarseRows3D)()
-    T.form_owned_z(block(A, d), mask, hess_nodes, hess)
+    B = block(A, d)
+    T.set_fine(B, mask, hess_nodes, hess)
     if not T.has_ghost_pattern:
         T.set_ghost_pattern(np.zeros(0, np.int64), np.zeros(1, np.int64), np.zeros(0, np.int64))
-    T.form_coarse(rows)
+    T.form_coarse(B, rows)
     return rows
 
 
@@ -62,8 +63,8 @@ def test_galerkin_rows_are_the_triple_product_and_an_update_has_the_bits_of_a_fr
     assert np.allclose(dense(rows, d), (P.T @ A @ P).toarray(), rtol=1e-12, atol=1e-12 * abs(A).max())
     assert rows.changed.all()
     # a new truncation and Hessian blocks on the same kernel: only the rows they reach are formed again
-    T.form_owned_z(block(A, d), mask, hn, H)
-    T.form_coarse(rows)
+    T.set_fine(block(A, d), mask, hn, H)
+    T.form_coarse(block(A, d), rows)
     Hf = np.zeros((nf * d, nf * d))
     for k, i in enumerate(hn):
         Hf[i * d:(i + 1) * d, i * d:(i + 1) * d] = H[k]
@@ -73,8 +74,8 @@ def test_galerkin_rows_are_the_triple_product_and_an_update_has_the_bits_of_a_fr
     fresh = galerkin(kernel(P, d), A, mask, hn, H, d)
     assert np.array_equal(rows.blocks()[2], fresh.blocks()[2])
     # the same inputs again change nothing
-    T.form_owned_z(block(A, d), mask, hn, H)
-    T.form_coarse(rows)
+    T.set_fine(block(A, d), mask, hn, H)
+    T.form_coarse(block(A, d), rows)
     assert not rows.changed.any()
 
 

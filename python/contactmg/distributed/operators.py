@@ -100,24 +100,18 @@ def rotate_rows(P: sp.csr_matrix, nodes: np.ndarray, frames: np.ndarray, d: int)
 
 def transfer_kernel(P: sp.csr_matrix, fine_level, coarse_level, d: int):
     """The core's DistributedTransfer of a local transfer (scalar CSR, rows of every local fine node):
-    restriction, prolongation, bound restriction and the Galerkin rows it forms, on d x d blocks. The
-    scipy matrix is not kept (one copy of P per level)."""
+    restriction, prolongation, bound restriction and the Galerkin rows it forms (it keeps a weight an
+    entry where a block is w I). The scipy matrix is not kept (one copy of P per level)."""
     from .. import _core
     cls = _core.DistributedTransfer2D if d == 2 else _core.DistributedTransfer3D
     return cls(to_block_matrix(P, d), (fine_level.owner == fine_level.rank).astype(np.uint8),
                (coarse_level.owner == coarse_level.rank).astype(np.uint8))
 
 
-def _exchange_z_rows(comm, fine_level, coarse_gid: np.ndarray, T) -> None:
+def _exchange_z_rows(comm, fine_level, coarse_gid: np.ndarray, T, A) -> None:
     """The ghost rows of Z = (M A M) P from their owners: the patterns (columns as global ids) once,
-    the blocks at every rebuild. Collective.
-
-    A ghost row reaching a coarse node this rank does not hold is left out: no owned coarse row
-    sums it. (If an owned coarse node J has P_iJ != 0, every column K of Z_i shares a coarse cell
-    with J: the fine cell of i and a neighbour j lies in one coarse cell, whose vertices are J (the
-    smallest face holding i has J) and K (P_jK != 0). So K is local.) A ghost fine node at the edge
-    of the layer may have such a row; it is sent because the halo sends every ghost its owner's
-    values."""
+    the blocks at every rebuild. A column this rank does not hold arrives as -1 (the core leaves that
+    row out: no owned coarse row sums it). Collective."""
     halo = fine_level.halo
     empty = np.zeros(0, np.int64)
     if is_serial(comm) or halo is None or not (halo.sources or halo.destinations):
@@ -127,53 +121,41 @@ def _exchange_z_rows(comm, fine_level, coarse_gid: np.ndarray, T) -> None:
     if not T.has_ghost_pattern:
         sent = [None] * comm.size
         for r in halo.destinations:
-            ptr, cols = T.z_pattern(halo.send[r])
+            ptr, cols = T.z_pattern(A, halo.send[r])
             sent[r] = (ptr, coarse_gid[cols])
         got = comm.alltoall(sent)
         nodes, ptrs, cols = [empty], [np.zeros(1, np.int64)], [empty]
-        T.kept_blocks = {}  # per source rank: which received blocks belong to rows kept
         for r in halo.sources:
             ptr, gcols = got[r]
             J = np.minimum(np.searchsorted(coarse_gid, gcols), max(len(coarse_gid) - 1, 0))
             held = (coarse_gid[J] == gcols) if len(coarse_gid) else np.zeros(len(gcols), bool)
-            counts = np.diff(ptr)
-            row_of = np.repeat(np.arange(len(counts)), counts)
-            keep_row = np.ones(len(counts), bool)
-            keep_row[row_of[~held]] = False
-            keep_block = keep_row[row_of]
-            T.kept_blocks[r] = keep_block
-            nodes.append(np.asarray(halo.recv[r], np.int64)[keep_row])
-            ptrs.append(np.cumsum(counts[keep_row]) + ptrs[-1][-1])
-            cols.append(J[keep_block].astype(np.int64))
+            nodes.append(np.asarray(halo.recv[r], np.int64))
+            ptrs.append(np.asarray(ptr[1:], np.int64) + ptrs[-1][-1])
+            cols.append(np.where(held, J, -1).astype(np.int64))
         T.set_ghost_pattern(np.concatenate(nodes), np.concatenate(ptrs), np.concatenate(cols))
-    got = comm.alltoall([T.z_values(halo.send[r]) if r in halo.send else None for r in range(comm.size)])
+    got = comm.alltoall([T.z_values(A, halo.send[r]) if r in halo.send else None for r in range(comm.size)])
     if halo.sources:
-        values = []
-        for r in halo.sources:
-            keep = T.kept_blocks[r]
-            blocks = np.asarray(got[r]).reshape(len(keep), -1)
-            values.append(blocks[keep].ravel())
-        T.set_ghost_values(np.concatenate([halo.recv[r] for r in halo.sources]).astype(np.int64),
-                           np.concatenate(values))
+        T.set_ghost_values(np.concatenate([np.asarray(got[r]).ravel() for r in halo.sources]))
 
 
 def galerkin_rows(comm, fine_level, coarse_level, T, rows, d: int, A=None, mask=None, hess_nodes=None, hess=None,
                   above=None) -> None:
     """The owned rows of P^T M A M P on the coarse level into `rows` (the core's CoarseRows; ghost
-    rows empty), P = T's transfer: (M A M) P formed by the owners of the fine rows, the ghost rows
-    sent, then each owned coarse row summed over its fine rows in ascending order (the core's
-    DistributedTransfer). A: the fine BlockMatrix with the mask (per fine dof, 0/1) and the Hessian
-    blocks at hess_nodes; or above: the CoarseRows of the level above (no mask). Only the rows whose
-    inputs changed are formed again, with the bits of a full rebuild. Collective."""
+    rows empty), P = T's transfer: the Z = (M A M) P rows of the ghosts sent by their owners, then
+    each owned coarse row summed over its fine rows in ascending order, the owned Z rows formed where
+    needed (the core's DistributedTransfer). A: the fine BlockMatrix with the mask (per fine dof, 0/1)
+    and the Hessian blocks at hess_nodes; or above: the CoarseRows of the level above (no mask). Only
+    the rows whose inputs changed are formed again, with the bits of a full rebuild. Collective."""
     if above is not None:
-        T.form_owned_z_from(above)
+        T.set_fine(above)
+        A = above
     else:
         if hess_nodes is None or not len(hess_nodes):
             hess_nodes, hess = np.zeros(0, np.int64), np.zeros((0, d, d))
-        T.form_owned_z(A, np.ascontiguousarray(mask, np.uint8).ravel(), np.asarray(hess_nodes, np.int64),
-                       np.ascontiguousarray(hess, float).reshape(-1, d, d))
-    _exchange_z_rows(comm, fine_level, coarse_level.gid, T)
-    T.form_coarse(rows)
+        T.set_fine(A, np.ascontiguousarray(mask, np.uint8).ravel(), np.asarray(hess_nodes, np.int64),
+                   np.ascontiguousarray(hess, float).reshape(-1, d, d))
+    _exchange_z_rows(comm, fine_level, coarse_level.gid, T, A)
+    T.form_coarse(A, rows)
 
 
 def rows_to_csr(rows, d: int) -> sp.csr_matrix:
