@@ -39,13 +39,19 @@ CMG_PREFETCH_INLINE void prefetch_block_columns(const ColIndex* indices, Index b
 // 16 and 64 alike (docs/dev/decisions/0015-locality-order.md).
 constexpr Index kPrefetchValueRows = 16;
 
-// The cache lines of the values of row i + ahead (if there is one); V: the stored value type
+// The cache lines of the values of row j; V: the stored value type
+template <int d, class V>
+CMG_PREFETCH_INLINE void prefetch_block_values(const V* values, const Index* ptr, Index j) {
+  const char* b = reinterpret_cast<const char*>(values + ptr[j] * d * d);
+  const char* e = reinterpret_cast<const char*>(values + ptr[j + 1] * d * d);
+  for (; b < e; b += 64) __builtin_prefetch(b);
+}
+
+// The cache lines of the values of row i + ahead (if there is one)
 template <int d, class V>
 CMG_PREFETCH_INLINE void prefetch_row_values(const V* values, const Index* ptr, Index i, Index ahead, Index n) {
   if (ahead <= 0 || i + ahead >= n) return;
-  const char* b = reinterpret_cast<const char*>(values + ptr[i + ahead] * d * d);
-  const char* e = reinterpret_cast<const char*>(values + ptr[i + ahead + 1] * d * d);
-  for (; b < e; b += 64) __builtin_prefetch(b);
+  prefetch_block_values<d>(values, ptr, i + ahead);
 }
 
 // s (+/-)= sum_{k in [b, e)} A_k x_{col k} over d x d row-major blocks. Scalar accumulators: with

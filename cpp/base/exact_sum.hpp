@@ -36,6 +36,8 @@ class ExactAccumulator {
   // Adds m * 2^bit units of 2^kExpMin: |m| < 2^53 signed, bit >= 0 the position of m's lowest bit in T.
   inline void add_mantissa(std::int64_t m, int bit) {
     const int c = bit >> 5, s = bit & 31;
+    low_ = std::min(low_, c);
+    high_ = std::max(high_, c + 1);
     // m * 2^s = low + high * 2^32 with low its last 32 bits (the unsigned shift may drop high bits,
     // never these) and high = floor(m / 2^(32 - s)), below 2^53 in magnitude
     chunks_[c] += std::int64_t((std::uint64_t(m) << s) & 0xffffffffu);
@@ -43,12 +45,20 @@ class ExactAccumulator {
   }
 
   // Carries of every chunk into the next: afterwards all chunks but the last hold a digit in [0, 2^32).
+  // Only the chunks from the lowest one added to since the last pass move: below it every chunk is a
+  // digit already. Above the highest one added to, a carry may run on (a negative chunk borrows from
+  // the digits above it), so the pass goes on until no carry is left: the same digits as a pass over
+  // every chunk.
   void normalise() {
-    for (int k = 0; k + 1 < kChunks; ++k) {
+    int k = std::min(low_, kChunks - 1);
+    for (; k + 1 < kChunks; ++k) {
       const std::int64_t carry = chunks_[k] >> kDigitBits;  // floor division by 2^32
+      if (carry == 0 && k >= high_) break;
       chunks_[k] -= carry * (std::int64_t(1) << kDigitBits);
       chunks_[k + 1] += carry;
     }
+    low_ = kChunks;
+    high_ = 0;
   }
 
   // T in two's complement, little-endian: kChunks - 1 digits of 4 bytes and the signed last chunk
@@ -67,6 +77,7 @@ class ExactAccumulator {
 
  private:
   std::array<std::int64_t, kChunks> chunks_;
+  int low_ = 0, high_ = kChunks;  // the chunks added to since the last normalise(): [low_, high_]
 };
 
 namespace exact_detail {
@@ -116,15 +127,18 @@ inline ExactAccumulator exact_sum(const double* x, std::int64_t n, const char* w
   });
 }
 
-// sum(x[i] * y[i]) exactly. The product of the two 53-bit mantissas is formed exactly in 128 bits
-// and added as its low and high 53 bits, so no case (subnormal, underflowing or overflowing
-// product) needs a path of its own.
+// sum(x[i] * y[i]) exactly, over the entries i whose row i / width is flagged in `rows` (nullptr:
+// every entry). The product of the two 53-bit mantissas is formed exactly in 128 bits and added as
+// its low and high 53 bits, so no case (subnormal, underflowing or overflowing product) needs a path
+// of its own.
 inline ExactAccumulator exact_dot(const double* x, const double* y, std::int64_t n, const char* what_x = "the first array",
-                                  const char* what_y = "the second array") {
+                                  const char* what_y = "the second array", const std::uint8_t* rows = nullptr,
+                                  std::int64_t width = 1) {
   using namespace exact_detail;
   constexpr int kBias = -ExactAccumulator::kExpMin;
   constexpr std::uint64_t kLow53 = (std::uint64_t(1) << 53) - 1, kFrac = (std::uint64_t(1) << 52) - 1;
   return accumulate(n, [=](ExactAccumulator& acc, std::int64_t i) {
+    if (rows && !rows[i / width]) return;
     std::uint64_t bx, by;
     std::memcpy(&bx, x + i, sizeof bx);
     std::memcpy(&by, y + i, sizeof by);

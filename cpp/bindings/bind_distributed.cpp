@@ -32,19 +32,28 @@ void bind_distributed(py::module_& m) {
          }, py::arg("x"),
          "The sum of all entries of x (any shape) exactly, as the integer T with sum = T * 2^-2252 (the "
          "local_fixed_point_sum of contactmg.distributed.exchange). ValueError for a non-finite entry.");
-  m.def("exact_dot_limbs", [](DArr x, DArr y) {
+  m.def("exact_dot_limbs", [](DArr x, DArr y, py::object rows) {
            if (x.ndim() != y.ndim() || !std::equal(x.shape(), x.shape() + x.ndim(), y.shape()))
              throw InputError("exact_dot needs arrays of one length (one shape), got " + shape_of(x) + " and " + shape_of(y));
+           BArr flags;
+           std::int64_t width = 1;
+           if (!rows.is_none()) {
+             flags = rows.cast<BArr>();
+             if (x.ndim() < 1 || flags.ndim() != 1 || flags.size() != x.shape(0))
+               throw InputError("rows needs one flag per row of x, got " + std::to_string(flags.size()) + " for shape " + shape_of(x));
+             width = x.shape(0) ? (std::int64_t)x.size() / x.shape(0) : 1;
+           }
            ExactAccumulator acc;
            {
              py::gil_scoped_release release;
-             acc = exact_dot(x.data(), y.data(), (std::int64_t)x.size(), "the first array", "the second array");
+             acc = exact_dot(x.data(), y.data(), (std::int64_t)x.size(), "the first array", "the second array",
+                             rows.is_none() ? nullptr : flags.data(), width);
            }
            return to_int(acc);
-         }, py::arg("x"), py::arg("y"),
-         "sum(x * y) over all entries (x and y of one shape) exactly, each product exact, as the integer T with "
-         "sum = T * 2^-2252 (the local_fixed_point_dot of contactmg.distributed.exchange). ValueError for a "
-         "non-finite entry or different shapes.");
+         }, py::arg("x"), py::arg("y"), py::arg("rows") = py::none(),
+         "sum(x * y) over all entries (x and y of one shape; with rows, a flag per row of x: the flagged rows' "
+         "entries only) exactly, each product exact, as the integer T with sum = T * 2^-2252 (the "
+         "local_fixed_point_dot of contactmg.distributed.exchange). ValueError for a non-finite entry or different shapes.");
 }
 
 }  // namespace cmg::bindings

@@ -60,21 +60,22 @@ void bind_levels(py::module_& m) {
              if (c.Dinv.size() != (std::size_t)(n * d * d)) throw InputError("sweep before invert");
              double* xx = writable_array(x, "x", n * d);
              require_shape(b, "b", {(py::ssize_t)n, d});
-             std::vector<Index> r = index_list(rows);
-             for (Index i : r)
-               if (i < 0 || i >= n) throw InputError("a row to sweep is outside the level");
-             const SweepOrder order(std::move(r));
+             const Index* r = rows.data();
+             const Index count = (Index)rows.size();
+             for (Index q = 0; q < count; ++q)
+               if (r[q] < 0 || r[q] >= n) throw InputError("a row to sweep is outside the level");
              if (lo.is_none()) {
                py::gil_scoped_release free;
-               block_gs_sweep<d>(c.A, c.Dinv, b.data(), xx, forward, order, omega);
+               gs_list<d>(c.A, c.Dinv.data(), nullptr, nullptr, nullptr, nullptr, b.data(), xx, omega, r, count, forward);
                return;
              }
              const DArr l = lo.cast<DArr>(), h = hi.cast<DArr>();
              require_shape(l, "lo", {(py::ssize_t)n, d});
              require_shape(h, "hi", {(py::ssize_t)n, d});
-             const std::vector<std::uint8_t> bv = flags(bounded.cast<BArr>(), n, "bounded");
+             const BArr bv = bounded.cast<BArr>();
+             if (bv.size() != n) throw InputError("bounded has " + std::to_string(bv.size()) + " entries, " + std::to_string(n) + " expected");
              py::gil_scoped_release free;
-             projected_gs_sweep<d>(c.A, c.Dinv, bv, c.inert, l.data(), h.data(), b.data(), xx, forward, order, omega);
+             gs_list<d>(c.A, c.Dinv.data(), bv.data(), c.inert.data(), l.data(), h.data(), b.data(), xx, omega, r, count, forward);
            }, py::arg("x"), py::arg("b"), py::arg("rows"), py::arg("forward"), py::arg("omega") = 1.0, py::arg("lo") = py::none(),
            py::arg("hi") = py::none(), py::arg("bounded") = py::none(),
            "one block (or, with bounds, projected) Gauss-Seidel pass over rows, x (n, d) in place")
@@ -182,6 +183,20 @@ void bind_levels(py::module_& m) {
 }  // namespace
 
 void bind_distributed_levels(py::module_& m) {
+  m.def("finite_rows", [](const DArr& lo, const DArr& hi) {
+          if (lo.ndim() != 2 || hi.ndim() != 2 || lo.shape(0) != hi.shape(0) || lo.shape(1) != hi.shape(1))
+            throw InputError("lo and hi must be arrays (n, d) of one shape");
+          const py::ssize_t n = lo.shape(0), w = lo.shape(1);
+          py::array_t<std::uint8_t> out(n);
+          std::uint8_t* o = out.mutable_data();
+          const double *l = lo.data(), *h = hi.data();
+          for (py::ssize_t i = 0; i < n; ++i) {
+            bool f = false;
+            for (py::ssize_t c = 0; c < w; ++c) f = f || std::isfinite(l[i * w + c]) || std::isfinite(h[i * w + c]);
+            o[i] = f;
+          }
+          return out;
+        }, py::arg("lo"), py::arg("hi"), "per row: 1 where a bound of the row is finite");
   using F = GatheredCoarsestFactor;
   py::class_<F, std::shared_ptr<F>>(m, "GatheredCoarsestFactor",
                                     "The gathered coarsest level's sparse LDL^T with the serial solver's low-rank updates "

@@ -20,6 +20,12 @@ T* writable(py::array_t<T>& a, const char* name, py::ssize_t size) {
   return a.mutable_data();
 }
 
+void check_rows(const IArr& rows, Index n) {
+  const Index* r = rows.data();
+  for (py::ssize_t q = 0; q < rows.size(); ++q)
+    if (r[q] < 0 || r[q] >= n) throw InputError("a row to sweep (" + std::to_string(r[q]) + ") is outside 0.." + std::to_string(n - 1));
+}
+
 std::vector<Index> row_list(const IArr& rows, Index n) {
   std::vector<Index> out(rows.data(), rows.data() + rows.size());
   for (Index i : out)
@@ -62,17 +68,21 @@ struct LocalContactLevel {
     double* x = writable(u, "u", n() * d);
     if (!(omega > 0 && omega < 2)) throw InputError("omega must lie in (0, 2)");
     if (threads < 1) throw InputError("threads must be >= 1");
-    const std::vector<Index> list = row_list(rows, n());
+    check_rows(rows, n());
     py::gil_scoped_release free;
     if (threads == 1) {
-      const SweepOrder order(list);
-      with_law(law, [&](auto L) { NonlinearGaussSeidel<d, decltype(L)>::sweep(P, x, forward, order, omega); });
+      with_law(law, [&](auto L) { NonlinearGaussSeidel<d, decltype(L)>::sweep_list(P, x, rows.data(), (Index)rows.size(), forward, omega); });
       return;
     }
+    // the list in one chunk per thread, each by the list kernel
+    const Index count = (Index)rows.size(), chunk = (count + threads - 1) / threads;
+    const Index* r = rows.data();
     ThreadScope team(threads);
     with_law(law, [&](auto L) {
-      parallel_for((Index)list.size(), [&](Index q) { NonlinearGaussSeidel<d, decltype(L)>::row_update(P, x, list[q], omega); },
-                   kSerialColourRows);
+      parallel_for(threads, [&](Index t) {
+        const Index b = std::min(count, t * chunk), e = std::min(count, b + chunk);
+        NonlinearGaussSeidel<d, decltype(L)>::sweep_list(P, x, r + b, e - b, true, omega);
+      }, count >= kSerialColourRows ? 1 : threads + 1);
     });
   }
 
@@ -209,6 +219,36 @@ struct LocalLevelSmoother {
     py::gil_scoped_release free;
     projected_gs_sweep<d>(A, Dinv, bv, inert, l.data(), h.data(), b.data(), xx, forward, order, omega);
   }
+
+  // Projected passes over every row, forward and backward in turn, until one moves no entry by more
+  // than tol max|x| or after max_sweeps; returns the passes made. A row is bounded where a bound of
+  // it is finite.
+  int projected_sweeps(py::array_t<double>& x, const DArr& b, const DArr& lo, const DArr& hi, double omega, int max_sweeps, double tol) {
+    const Index n = A.rows;
+    if (!(omega > 0 && omega < 2)) throw InputError("omega must lie in (0, 2)");
+    double* xx = writable(x, "x", n * d);
+    require_shape(b, "b", {(py::ssize_t)n, d});
+    require_shape(lo, "lo", {(py::ssize_t)n, d});
+    require_shape(hi, "hi", {(py::ssize_t)n, d});
+    std::vector<std::uint8_t> bounded(n, 0);
+    for (Index q = 0; q < n * d; ++q)
+      if (std::isfinite(lo.data()[q]) || std::isfinite(hi.data()[q])) bounded[q / d] = 1;
+    py::gil_scoped_release free;
+    std::vector<double> before(n * d);
+    int s = 0;
+    while (s < max_sweeps) {
+      std::copy(xx, xx + n * d, before.begin());
+      projected_gs_sweep<d>(A, Dinv, bounded, inert, lo.data(), hi.data(), b.data(), xx, s % 2 == 0, SweepOrder(), omega);
+      ++s;
+      double change = 0.0, size = 0.0;
+      for (Index q = 0; q < n * d; ++q) {
+        change = std::max(change, std::abs(xx[q] - before[q]));
+        size = std::max(size, std::abs(xx[q]));
+      }
+      if (change <= tol * size) break;
+    }
+    return s;
+  }
 };
 
 template <int d>
@@ -249,7 +289,11 @@ void bind_local(py::module_& m) {
       .def("sweep", &S::sweep, py::arg("x"), py::arg("b"), py::arg("rows"), py::arg("forward"), py::arg("omega") = 1.0,
            py::arg("lo") = py::none(),
            py::arg("hi") = py::none(), py::arg("bounded") = py::none(),
-           "one block (or, with bounds, projected) Gauss-Seidel pass over rows, x (n, d) in place");
+           "one block (or, with bounds, projected) Gauss-Seidel pass over rows, x (n, d) in place")
+      .def("projected_sweeps", &S::projected_sweeps, py::arg("x"), py::arg("b"), py::arg("lo"), py::arg("hi"), py::arg("omega"),
+           py::arg("max_sweeps"), py::arg("tol"),
+           "projected passes over every row, forward and backward in turn, until one moves no entry by more than "
+           "tol max|x| or max_sweeps; x (n, d) in place; returns the passes made");
 }
 
 }  // namespace

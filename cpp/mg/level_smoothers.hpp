@@ -133,17 +133,23 @@ __attribute__((noinline)) void projected_row_out_of_line(const BlockMatrix<d>& A
 // kPrefetchRows ahead (other colours' ranges), the stored inverse applied on scalars; bounded rows
 // (bounded != nullptr: a projected sweep; only near the contact zone) go out of line. The same
 // sums and products in the same order as the per-row path: the same bits.
-template <int d, class V>
-void gs_range(const BlockMatrix<d>& A, const V* values, const double* Dinv, const std::uint8_t* bounded, const std::uint8_t* inert,
-              const double* lo, const double* hi, const double* b, double* x, double omega, Index r0, Index r1) {
+//
+// gs_rows is that loop over the rows row(0), ..., row(count - 1), row(q) prefetched where has(q):
+// gs_range's rows [r0, r1), and gs_list's list of rows (the owned rows of one colour between two
+// ghost exchanges of a distributed coarse sweep, python/contactmg/distributed/cycle.py).
+template <int d, class V, class Row, class Has>
+void gs_rows(const BlockMatrix<d>& A, const V* values, const double* Dinv, const std::uint8_t* bounded, const std::uint8_t* inert,
+             const double* lo, const double* hi, const double* b, double* x, double omega, Index count, Row row, Has has) {
   const ColIndex* cols = A.indices.data();
   const Index* ptr = A.indptr.data();
   const Index* diag = A.diag.data();
-  const Index n = A.rows;
-  constexpr Index ahead = kPrefetchValueRows;
-  for (Index i = r0; i < r1; ++i) {
-    if (i + kPrefetchRows < n) prefetch_block_columns<d>(cols, ptr[i + kPrefetchRows], ptr[i + kPrefetchRows + 1], x);
-    prefetch_row_values<d>(values, ptr, i, ahead, n);
+  for (Index q = 0; q < count; ++q) {
+    const Index i = row(q);
+    if (has(q + kPrefetchRows)) {
+      const Index j = row(q + kPrefetchRows);
+      prefetch_block_columns<d>(cols, ptr[j], ptr[j + 1], x);
+    }
+    if (has(q + kPrefetchValueRows)) prefetch_block_values<d>(values, ptr, row(q + kPrefetchValueRows));
     if (bounded && bounded[i]) {
       projected_row_out_of_line<d>(A, values, inert, lo, hi, b, x, i);
       continue;
@@ -158,6 +164,27 @@ void gs_range(const BlockMatrix<d>& A, const V* values, const double* Dinv, cons
     }
     relaxed_block_solve<d>(CMatMap<d>(Dinv + i * d * d), s, x + d * i, omega);
   }
+}
+
+template <int d, class V>
+void gs_range(const BlockMatrix<d>& A, const V* values, const double* Dinv, const std::uint8_t* bounded, const std::uint8_t* inert,
+              const double* lo, const double* hi, const double* b, double* x, double omega, Index r0, Index r1) {
+  // the prefetches run on past r1, into the rows of the next colour
+  const Index n = A.rows;
+  gs_rows<d>(A, values, Dinv, bounded, inert, lo, hi, b, x, omega, r1 - r0, [r0](Index q) { return r0 + q; },
+             [r0, n](Index q) { return r0 + q < n; });
+}
+
+// rows[0], ..., rows[count - 1] in that order (backward: the reverse); bounded == nullptr: no bounds.
+template <int d>
+void gs_list(const BlockMatrix<d>& A, const double* Dinv, const std::uint8_t* bounded, const std::uint8_t* inert, const double* lo,
+             const double* hi, const double* b, double* x, double omega, const Index* rows, Index count, bool forward) {
+  const auto in_list = [count](Index q) { return q < count; };
+  if (forward)
+    gs_rows<d>(A, A.values.data(), Dinv, bounded, inert, lo, hi, b, x, omega, count, [rows](Index q) { return rows[q]; }, in_list);
+  else
+    gs_rows<d>(A, A.values.data(), Dinv, bounded, inert, lo, hi, b, x, omega, count,
+               [rows, count](Index q) { return rows[count - 1 - q]; }, in_list);
 }
 
 template <int d>

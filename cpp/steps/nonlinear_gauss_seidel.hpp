@@ -45,6 +45,26 @@ struct NonlinearGaussSeidel {
   // docs/dev/decisions/0015-locality-order.md). The rest go through row_update, out of line. The same
   // sums and products in the same order as row_update: the same bits (the test above).
   static void sweep_range(const ContactProblem<d>& P, double* u, Index b, Index e, double omega) {
+    // the prefetches run on past e, into the rows of the next colour
+    const Index n = P.matrix().rows;
+    sweep_rows(P, u, e - b, omega, [b](Index q) { return b + q; }, [b, n](Index q) { return b + q < n; });
+  }
+
+  // The rows rows[0], ..., rows[count - 1] in that order (backward: the reverse), by the loop of
+  // sweep_range: the owned rows of one colour between two ghost exchanges of a distributed sweep
+  // (python/contactmg/distributed/cycle.py), stored in ascending global id rather than by colours.
+  // The prefetches look ahead in the list. The same bits as row_update.
+  static void sweep_list(const ContactProblem<d>& P, double* u, const Index* rows, Index count, bool forward, double omega) {
+    const auto in_list = [count](Index q) { return q < count; };
+    if (forward) sweep_rows(P, u, count, omega, [rows](Index q) { return rows[q]; }, in_list);
+    else sweep_rows(P, u, count, omega, [rows, count](Index q) { return rows[count - 1 - q]; }, in_list);
+  }
+
+ private:
+  // The loop of sweep_range and sweep_list over rows row(0), ..., row(count - 1); row(q) is
+  // prefetched where has(q).
+  template <class Row, class Has>
+  static void sweep_rows(const ContactProblem<d>& P, double* u, Index count, double omega, Row row, Has has) {
     using CP = ContactProblem<d>;
     const BlockMatrix<d>& A = P.matrix();
     const double* values = A.values.data();
@@ -55,11 +75,13 @@ struct NonlinearGaussSeidel {
     const std::uint8_t* flags = P.row_flags();
     // law::Linear has no contact rows: its contact nodes only carry frames (row_update's c < 0)
     const std::uint8_t other = L::has_contact ? (CP::kSpecialInverse | CP::kContactRow) : CP::kSpecialInverse;
-    const Index n = A.rows;
-    constexpr Index ahead = kPrefetchValueRows;
-    for (Index i = b; i < e; ++i) {
-      if (i + kPrefetchRows < n) prefetch_block_columns<d>(cols, ptr[i + kPrefetchRows], ptr[i + kPrefetchRows + 1], u);
-      prefetch_row_values<d>(values, ptr, i, ahead, n);
+    for (Index q = 0; q < count; ++q) {
+      const Index i = row(q);
+      if (has(q + kPrefetchRows)) {
+        const Index j = row(q + kPrefetchRows);
+        prefetch_block_columns<d>(cols, ptr[j], ptr[j + 1], u);
+      }
+      if (has(q + kPrefetchValueRows)) prefetch_block_values<d>(values, ptr, row(q + kPrefetchValueRows));
       if (flags[i] & other) {
         other_row(P, u, i, omega);
         continue;
@@ -73,7 +95,6 @@ struct NonlinearGaussSeidel {
     }
   }
 
- private:
   __attribute__((noinline)) static void other_row(const ContactProblem<d>& P, double* u, Index i, double omega) {
     row_update(P, u, i, omega);
   }

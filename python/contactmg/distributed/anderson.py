@@ -11,7 +11,7 @@ from typing import Callable, List, Optional, Tuple
 
 import numpy as np
 
-from .exchange import exact_dot
+from .exchange import exact_dots
 
 # the cycles mixed: the serial SettledAnderson::kDepth (a fixed internal choice; 2-5 behave alike)
 DEPTH = 3
@@ -20,8 +20,8 @@ DEPTH = 3
 class DistributedAnderson:
     """The history of the last cycles x -> G(x) of one contact state and the mixed iterate."""
 
-    def __init__(self, comm, owned_dofs: np.ndarray):
-        self.comm, self.owned = comm, owned_dofs
+    def __init__(self, comm, owned_nodes: np.ndarray, d: int):
+        self.comm, self.owned, self.d = comm, np.ascontiguousarray(owned_nodes, np.uint8), d
         self.reset()
 
     def reset(self) -> None:
@@ -38,8 +38,10 @@ class DistributedAnderson:
         held = [v for pair in self.pairs for v in pair] + (list(self.last) if self.last is not None else [])
         return int(sum(v.nbytes for v in held))
 
-    def _dot(self, a: np.ndarray, b: np.ndarray) -> float:
-        return exact_dot(a[self.owned], b[self.owned], self.comm)
+    def _dots(self, pairs) -> List[float]:
+        """a . b over the owned dofs for each pair (flat vectors), one collective for all."""
+        d = self.d
+        return exact_dots([(a.reshape(-1, d), b.reshape(-1, d)) for a, b in pairs], self.comm, self.owned)
 
     def step(self, x: np.ndarray, gx: np.ndarray, admit: Callable[[np.ndarray, np.ndarray], bool],
              restart: bool = False) -> bool:
@@ -50,22 +52,26 @@ class DistributedAnderson:
             self.reset()
             return False
         g = gx - x
-        gnorm = self._dot(g, g)
         if self.last is not None:
             xl, gl = self.last
             dx, dg = x - xl, g - (gl - xl)
+            # every dot this step may need, in one collective: |g|^2, the new Gram row, the new rhs
+            k = len(self.pairs)
+            dots = self._dots([(g, g)] + [(dg, old_dg) for _, old_dg in self.pairs] + [(dg, dg)] +
+                              [(old_dg, g) for _, old_dg in self.pairs] + [(dg, g)])
+            gnorm, row, rhs = dots[0], dots[1:k + 2], dots[k + 2:]
             if self.accelerated and not gnorm < self.last_gnorm:  # the mixed step did not help: start over
                 self.reset()
                 self.last = (x.copy(), gx.copy())
             else:
-                row = [self._dot(dg, old_dg) for _, old_dg in self.pairs] + [self._dot(dg, dg)]
                 for i, v in enumerate(row[:-1]):
                     self.gram[i].append(v)
                 self.gram.append(row)
                 self.pairs.append((dx, dg))
-                self.rhs = [self._dot(old_dg, g) for _, old_dg in self.pairs]
+                self.rhs = rhs
                 self.last = None
         else:
+            gnorm = self._dots([(g, g)])[0]
             self.last = (x.copy(), gx.copy())
         self.last_gnorm = gnorm
         self.accelerated = False

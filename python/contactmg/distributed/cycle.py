@@ -28,8 +28,8 @@ from .. import _core
 from .anderson import DistributedAnderson
 from .colouring import colour_level
 from .comm import is_serial, op
-from .exchange import exact_dot, exact_sum
-from .operators import (GatheredCoarsest, galerkin_rows, local_transfer, node_to_dof_rows, rotate_rows, rows_to_csr,
+from .exchange import exact_dot, exact_dots, exact_sum
+from .operators import (GatheredCoarsest, galerkin_rows, local_transfer, rotate_rows, rows_to_csr,
                         transfer_kernel)
 
 INF = np.inf
@@ -88,9 +88,7 @@ class CoarseLevel:
         """Restricted bounds: the owned rows' are complete, the ghosts' from their owners."""
         self.lo, self.hi = lo, hi
         if self.halo is not None:
-            both = np.ascontiguousarray(np.hstack([lo, hi]))
-            self.halo.update(both)
-            self.lo, self.hi = np.ascontiguousarray(both[:, :self.d]), np.ascontiguousarray(both[:, self.d:])
+            self.halo.update_many(lo, hi)
 
     def clear_bounds(self) -> None:
         """No bounds on any row (an unbounded correction)."""
@@ -105,9 +103,12 @@ class CoarseLevel:
 
     def set_bounded(self, bounded: bool) -> None:
         """Which rows have a finite bound, and whether any row on any rank has one."""
-        b = bounded & (np.isfinite(self.lo).any(axis=1) | np.isfinite(self.hi).any(axis=1))
-        self.bounded = b.astype(np.uint8)
-        self.any_bounds = _any(self.comm, bounded and bool(b[self.owned].any()))
+        if not bounded:
+            self.bounded = np.zeros(self.n, np.uint8)
+            self.any_bounds = _any(self.comm, False)
+            return
+        self.bounded = _core.finite_rows(self.lo, self.hi)
+        self.any_bounds = _any(self.comm, bool(np.any(self.bounded & self.owned_u8)))
 
     def sweep(self, forward: bool, omega: float) -> None:
         """One (projected) Gauss-Seidel pass, colour by colour, the ghosts exchanged after each."""
@@ -232,12 +233,8 @@ class CoarseCorrection:
                 if not e < 0:
                     x[:] = 0.0
                 xb = x.reshape(-1, d).copy()
-                lo2, hi2, b2 = lo.reshape(-1, d), hi.reshape(-1, d), b.reshape(-1, d)
-                for s in range(COARSEST_MAX_SWEEPS):
-                    before = xb.copy()
-                    S.projected_sweep(xb, b2, lo2, hi2, s % 2 == 0, opt.omega)
-                    if np.max(np.abs(xb - before)) <= 1e-14 * np.max(np.abs(xb)):
-                        break
+                S.projected_sweeps(xb, b.reshape(-1, d), lo.reshape(-1, d), hi.reshape(-1, d), opt.omega,
+                                   COARSEST_MAX_SWEEPS, 1e-14)
                 x = xb.ravel()
         L.x[:] = x.reshape(-1, d)[gid]
 
@@ -255,9 +252,12 @@ class DistributedMonotoneStep:
         lev = fine.level
         self.n = len(lev.gid)
         self.owned = lev.owner == lev.rank
-        self.owned_dofs = node_to_dof_rows(np.flatnonzero(self.owned), d)
-        self.halo = lev.halo
+        self.owned_u8 = self.owned.astype(np.uint8)
+        self.owned_nodes = np.flatnonzero(self.owned).astype(np.int64)
+        self._lo, self._hi = np.full((self.n, d), -INF), np.full((self.n, d), INF)  # the fine correction bounds
+        self.halo = None if is_serial(comm) else lev.halo  # one rank: no ghosts, nothing to exchange
         self.colours = _colour_rows(comm, lev)
+        self.order = np.concatenate(self.colours or [np.zeros(0, np.int64)])
         self.f = fine.core.load
         P = local_transfer(lev, hierarchy.levels[-2], d, comm)
         P = rotate_rows(P, fine.contact_nodes, fine.frames, d)
@@ -268,7 +268,7 @@ class DistributedMonotoneStep:
         self.notes = []
         self.rebuilds = 0  # coarse hierarchies built (the first included)
         # Coulomb: the frozen bound leaves a slow linear contraction once the state settles
-        self.anderson = DistributedAnderson(comm, self.owned_dofs) if fine.law == "coulomb" else None
+        self.anderson = DistributedAnderson(comm, self.owned, d) if fine.law == "coulomb" else None
         self.best_step = INF  # the smallest ||u^{k+1} - u^k||_A of the solve
         if fine.frames.size and not np.all(np.isin(np.round(np.abs(fine.frames), 15), (0.0, 1.0))):
             self.notes.append("rotated contact frames: the plain truncated coarse correction (the serial solver "
@@ -285,6 +285,9 @@ class DistributedMonotoneStep:
 
     def sweep(self, u: np.ndarray, forward: bool, omega: float) -> None:
         """One nonlinear Gauss-Seidel pass over the fine level, colour by colour, u (n, d) in place."""
+        if self.halo is None and self.opt.threads == 1:  # no exchange between the colours: one call, the same rows in order
+            self.fine.core.sweep(u, self.order, forward, omega, 1)
+            return
         order = self.colours if forward else self.colours[::-1]
         for rows in order:
             self.fine.core.sweep(u, rows, forward, omega, self.opt.threads)
@@ -296,18 +299,15 @@ class DistributedMonotoneStep:
         blocks, whether any bound is finite, and the fine residual with the friction gradient; ghost
         rows from their owners."""
         fine, d = self.fine, self.d
-        owned_nodes = np.flatnonzero(self.owned).astype(np.int64)
-        r = fine.core.residual(u, owned_nodes)
+        r = fine.core.residual(u, self.owned_nodes)
         mask, lo_c, hi_c, H, bounded = fine.core.linearize(u, r, fine.owned_contacts)
-        lo = np.full((self.n, d), -INF)
-        hi = np.full((self.n, d), INF)
+        # +-inf away from the contact nodes: the arrays are kept, only the contact rows are written
+        lo, hi = self._lo, self._hi
         lo[fine.contact_nodes] = lo_c
         hi[fine.contact_nodes] = hi_c
-        table = np.hstack([mask.astype(float), lo, hi, r])
         if self.halo is not None:
-            self.halo.update(table)
-        mask = table[:, :d].ravel()
-        lo, hi, r = table[:, d:2 * d], table[:, 2 * d:3 * d], np.ascontiguousarray(table[:, 3 * d:])
+            self.halo.update_many(mask, lo, hi, r)
+        mask = mask.ravel()
         hess = H[fine.owned_contacts]
         keep = np.abs(hess).reshape(len(hess), -1).max(axis=1, initial=0.0) > 0 if len(hess) else np.zeros(0, bool)
         hess_nodes = fine.contact_nodes[fine.owned_contacts][keep]
@@ -319,9 +319,9 @@ class DistributedMonotoneStep:
 
     def energy_norm(self, v: np.ndarray) -> float:
         """||v||_A over the owned rows (exact sums), v flat over the local dofs (ghosts fresh)."""
-        Av = self.multiply(v)
-        o = self.owned_dofs
-        return float(np.sqrt(max(exact_dot(v[o], Av[o], self.comm), 0.0)))
+        v = v.reshape(-1, self.d)
+        Av = self.fine.core.multiply(v, self.opt.threads)
+        return float(np.sqrt(max(exact_dot(v, Av, self.comm, self.owned_u8), 0.0)))
 
     def any_sliding(self, u: np.ndarray) -> bool:
         """Whether a contact node slides on any rank."""
@@ -391,17 +391,16 @@ class DistributedMonotoneStep:
 
     def record(self, u: np.ndarray) -> dict:
         """Energy (without the constant of the Dirichlet values), ||u||_A and the contact counts."""
-        uf = u.ravel()
-        Au = self.multiply(uf)
-        o = self.owned_dofs
-        e = exact_sum(np.concatenate([0.5 * uf[o] * Au[o], -self.f.ravel()[o] * uf[o]]), self.comm)
-        r = (self.f.ravel() - Au).reshape(-1, self.d)
-        state, fe = self.fine.core.contact_state(u, np.ascontiguousarray(r), self.fine.owned_contacts)
-        e += exact_sum(fe, self.comm)
+        Au = self.fine.core.multiply(u, self.opt.threads)
+        r = self.f - Au
+        state, fe = self.fine.core.contact_state(u, r, self.fine.owned_contacts)
+        # 1/2 u.Au - f.u over the owned dofs: each product exact, 2 e rounded once (halving is exact)
+        quad, twice = exact_dots([(u, Au), [(1, u, Au), (-2, self.f, u)]], self.comm, self.owned_u8)
+        e = 0.5 * twice + exact_sum(fe, self.comm)
         counts = np.array([np.count_nonzero(state > 0), np.count_nonzero(state == 1), np.count_nonzero(state == 2)])
         if not is_serial(self.comm):
             counts = np.sum(self.comm.allgather(counts), axis=0)
-        norm = float(np.sqrt(max(exact_dot(uf[o], Au[o], self.comm), 0.0)))
+        norm = float(np.sqrt(max(quad, 0.0)))
         return {"energy": e, "solution_norm": norm, "active": int(counts[0]), "stick": int(counts[1]),
                 "slip": int(counts[2])}
 

@@ -70,11 +70,14 @@ def local_fixed_point_sum(x) -> int:
     return _core.exact_sum_limbs(np.ascontiguousarray(x, dtype=float).ravel())
 
 
-def local_fixed_point_dot(x, y) -> int:
+def local_fixed_point_dot(x, y, rows=None) -> int:
     """sum(x * y) exactly, every product exact: the integer T with sum = T * 2^_E_MIN, from the
-    compiled core's long accumulator."""
-    return _core.exact_dot_limbs(np.ascontiguousarray(x, dtype=float).ravel(),
-                                 np.ascontiguousarray(y, dtype=float).ravel())
+    compiled core's long accumulator. rows: a flag per row of x (the rows counted), or None: all."""
+    x = np.ascontiguousarray(x, dtype=float)
+    y = np.ascontiguousarray(y, dtype=float)
+    if rows is None:
+        return _core.exact_dot_limbs(x.ravel(), y.ravel())
+    return _core.exact_dot_limbs(x, y, np.ascontiguousarray(rows, np.uint8))
 
 
 def _numpy_fixed_point_sum(x) -> int:
@@ -114,14 +117,31 @@ def exact_sum(x, comm=None) -> float:
     return _round(total)
 
 
-def exact_dot(x, y, comm=None) -> float:
-    """sum over all ranks of x . y (owned entries), correctly rounded: the exact products are
-    summed exactly; independent of the number of ranks and the partition."""
+def exact_dot(x, y, comm=None, rows=None) -> float:
+    """sum over all ranks of x . y (owned entries: pass those, or flag the owned rows of x in
+    `rows`), correctly rounded: the exact products are summed exactly; independent of the number of
+    ranks and the partition."""
+    return exact_dots([(x, y)], comm, rows)[0]
+
+
+def exact_dots(pairs, comm=None, rows=None) -> List[float]:
+    """exact_dot of every pair (x, y), or of every sum of pairs [(k, x, y), ...] with integer
+    coefficients k, with one collective for all."""
     comm = get_comm(comm)
-    total = local_fixed_point_dot(x, y)
+    totals, known = [], {}  # a pair of arrays met twice is summed once
+
+    def local(x, y):
+        key = (id(x), id(y))
+        if key not in known:
+            known[key] = local_fixed_point_dot(x, y, rows)
+        return known[key]
+
+    for p in pairs:
+        terms = p if isinstance(p, list) else [(1, p[0], p[1])]
+        totals.append(sum(int(k) * local(x, y) for k, x, y in terms))
     if not is_serial(comm):
-        total = sum(comm.allgather(total))
-    return _round(total)
+        totals = [sum(t) for t in zip(*comm.allgather(totals))]
+    return [_round(t) for t in totals]
 
 
 def exact_norm(x, comm=None) -> float:
@@ -185,23 +205,46 @@ class Halo:
         with the owners' rows, in place; returns `values`."""
         if self._graph is None:
             return values
-        MPI = mpi_module()
         if values.dtype != np.float64 or not values.flags.c_contiguous:
             raise TypeError("a halo exchanges C-contiguous float64 arrays")
         width = int(np.prod(values.shape[1:], dtype=np.int64))
         rows = values.reshape(len(values), width)
+        for r, block in zip(self.sources, self._exchange(lambda idx: rows[idx], width)):
+            rows[self.recv[r]] = block
+        return values
+
+    def update_many(self, *arrays: np.ndarray) -> None:
+        """update() of several arrays of one length (rows = local nodes; any dtype whose values a
+        double holds exactly, such as 0/1 flags) in one exchange."""
+        if self._graph is None:
+            return
+        widths = [int(np.prod(a.shape[1:], dtype=np.int64)) for a in arrays]
+
+        def pick(idx):
+            return np.hstack([a[idx].reshape(len(idx), w).astype(float) for a, w in zip(arrays, widths)])
+
+        for r, block in zip(self.sources, self._exchange(pick, sum(widths))):
+            at = 0
+            for a, w in zip(arrays, widths):
+                a[self.recv[r]] = block[:, at:at + w].reshape((-1,) + a.shape[1:])
+                at += w
+
+    def _exchange(self, pick, width: int) -> List[np.ndarray]:
+        """Sends pick(rows) ((k, width) floats) of the rows each destination holds as ghosts; returns
+        the blocks received from each source, in the order of self.sources."""
+        MPI = mpi_module()
         send_counts = [len(self.send[r]) * width for r in self.destinations]
         recv_counts = [len(self.recv[r]) * width for r in self.sources]
-        sendbuf = np.concatenate([rows[self.send[r]].ravel() for r in self.destinations]) if self.destinations \
-            else np.zeros(0)
+        sendbuf = np.concatenate([np.ascontiguousarray(pick(self.send[r]), float).ravel() for r in self.destinations]) \
+            if self.destinations else np.zeros(0)
         recvbuf = np.empty(sum(recv_counts))
         self._graph.Neighbor_alltoallv([sendbuf, (send_counts, None), MPI.DOUBLE],
                                        [recvbuf, (recv_counts, None), MPI.DOUBLE])
-        start = 0
-        for r, c in zip(self.sources, recv_counts):
-            rows[self.recv[r]] = recvbuf[start:start + c].reshape(-1, width)
+        blocks, start = [], 0
+        for c in recv_counts:
+            blocks.append(recvbuf[start:start + c].reshape(-1, width))
             start += c
-        return values
+        return blocks
 
     def free(self) -> None:
         """Release the neighbourhood communicator."""

@@ -228,17 +228,16 @@ class GatheredCoarsest:
             out[i] = v
         return out.ravel()
 
-    def projected_sweep(self, x: np.ndarray, b: np.ndarray, lo: np.ndarray, hi: np.ndarray, forward: bool,
-                        omega: float) -> None:
-        """One projected Gauss-Seidel pass over every row (global order), x (n, d) in place."""
+    def projected_sweeps(self, x: np.ndarray, b: np.ndarray, lo: np.ndarray, hi: np.ndarray, omega: float,
+                         max_sweeps: int, tol: float) -> int:
+        """Projected Gauss-Seidel passes over every row (global order), forward and backward in turn,
+        until one moves no entry by more than tol max|x| or after max_sweeps; x (n, d) in place."""
         d = self.d
         if self._smoother is None:
             from .. import _core
             cls = _core.LocalLevelSmoother2D if d == 2 else _core.LocalLevelSmoother3D
             self._smoother = cls(to_block_matrix(self.A, d), self.scale)
-            self._rows = np.arange(self.A.shape[0] // d, dtype=np.int64)
-        bounded = (np.isfinite(lo) | np.isfinite(hi)).any(axis=1).astype(np.uint8)
-        self._smoother.sweep(x, b, self._rows, forward, omega, lo, hi, bounded)
+        return self._smoother.projected_sweeps(x, b, lo, hi, omega, max_sweeps, tol)
 
     def memory_bytes(self) -> int:
         """The gathered matrix and its factor."""
