@@ -31,6 +31,17 @@ const std::uint8_t* optional_flags(const py::object& o, Index n, const char* nam
   return keep.data();
 }
 
+// visit: every coarse node once
+void check_visit(const IArr& visit, Index n) {
+  if ((Index)visit.size() != n) throw InputError("visit must list every coarse node once");
+  std::vector<std::uint8_t> seen(n, 0);
+  for (py::ssize_t q = 0; q < visit.size(); ++q) {
+    const Index I = visit.data()[q];
+    if (I < 0 || I >= n || seen[I]) throw InputError("visit must list every coarse node once");
+    seen[I] = 1;
+  }
+}
+
 template <int d>
 void bind_levels(py::module_& m) {
   const std::string sfx = std::to_string(d) + "D";
@@ -132,14 +143,17 @@ void bind_levels(py::module_& m) {
            "the ghost Z rows' patterns as sent (local coarse columns, -1: not held, the row left out), once")
       .def("set_ghost_values", [](T& t, const DArr& values) { t.set_ghost_values(values.data(), (Index)values.size()); },
            py::arg("values"), "the ghost Z rows' blocks from their owners, in the pattern's order")
-      .def("form_coarse", [](T& t, const BM& A, C& rows) {
+      .def("form_coarse", [](T& t, const BM& A, C& rows, const IArr& visit) {
+             check_visit(visit, t.coarse_nodes());
              py::gil_scoped_release free;
-             t.form_coarse(A, rows);
-           }, py::arg("A"), py::arg("rows"), "the owned coarse rows P^T Z into rows (formed again where a Z row changed)")
-      .def("form_coarse", [](T& t, const C& above, C& rows) {
+             t.form_coarse(A, rows, visit.data());
+           }, py::arg("A"), py::arg("rows"), py::arg("visit"),
+           "the owned coarse rows P^T Z into rows (formed again where a Z row changed), in the order visit")
+      .def("form_coarse", [](T& t, const C& above, C& rows, const IArr& visit) {
+             check_visit(visit, t.coarse_nodes());
              py::gil_scoped_release free;
-             t.form_coarse(above.A, rows);
-           }, py::arg("above"), py::arg("rows"))
+             t.form_coarse(above.A, rows, visit.data());
+           }, py::arg("above"), py::arg("rows"), py::arg("visit"))
       .def("restrict_residual", [](const T& t, const DArr& r, py::object mask) {
              require_shape(r, "r", {(py::ssize_t)t.fine_nodes(), d});
              BArr keep;

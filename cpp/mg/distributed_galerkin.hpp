@@ -236,8 +236,10 @@ class DistributedTransfer {
   // set_fine: row I is the sum over its fine rows i in ascending index of P_iI^T Z_i, formed again
   // where one of those Z rows changed; C.changed marks the rows whose bits changed. The first call
   // sets C's pattern: the columns of the Z rows of I's fine rows, and a diagonal slot (a row every
-  // fine row of which is truncated stays, inert).
-  void form_coarse(const BlockMatrix<d>& A, CoarseRows<d>& C) {
+  // fine row of which is truncated stays, inert). visit: the order the rows are formed in (nullptr:
+  // ascending; each row is formed alone, so the order changes no bit): in ascending global id the
+  // rows formed one after the other share fine rows, and their Z rows are read from the cache.
+  void form_coarse(const BlockMatrix<d>& A, CoarseRows<d>& C, const Index* visit = nullptr) {
     check_fine(A);
     if (!inputs_set_) throw InputError("form_coarse before set_fine");
     if (!ghost_pattern_done_) throw InputError("form_coarse before the ghost Z pattern is set");
@@ -264,7 +266,8 @@ class DistributedTransfer {
     C.changed.assign(nc, first ? 1 : 0);
     std::vector<Index> pos(nc, -1);
     std::vector<double> row;
-    for (Index I = 0; I < nc; ++I) {
+    for (Index q = 0; q < nc; ++q) {
+      const Index I = visit ? visit[q] : q;
       if (!owned_c_[I]) continue;
       bool dirty = first;
       for (Index a = tptr[I]; a < tptr[I + 1] && !dirty; ++a) dirty = z_changed_[trow[a]];

@@ -41,7 +41,7 @@ def galerkin(T, A, mask, hess_nodes, hess, d):
     T.set_fine(B, mask, hess_nodes, hess)
     if not T.has_ghost_pattern:
         T.set_ghost_pattern(np.zeros(0, np.int64), np.zeros(1, np.int64), np.zeros(0, np.int64))
-    T.form_coarse(B, rows)
+    T.form_coarse(B, rows, np.arange(T.coarse_nodes))
     return rows
 
 
@@ -64,7 +64,7 @@ def test_galerkin_rows_are_the_triple_product_and_an_update_has_the_bits_of_a_fr
     assert rows.changed.all()
     # a new truncation and Hessian blocks on the same kernel: only the rows they reach are formed again
     T.set_fine(block(A, d), mask, hn, H)
-    T.form_coarse(block(A, d), rows)
+    T.form_coarse(block(A, d), rows, np.arange(T.coarse_nodes)[::-1].copy())
     Hf = np.zeros((nf * d, nf * d))
     for k, i in enumerate(hn):
         Hf[i * d:(i + 1) * d, i * d:(i + 1) * d] = H[k]
@@ -75,7 +75,7 @@ def test_galerkin_rows_are_the_triple_product_and_an_update_has_the_bits_of_a_fr
     assert np.array_equal(rows.blocks()[2], fresh.blocks()[2])
     # the same inputs again change nothing
     T.set_fine(block(A, d), mask, hn, H)
-    T.form_coarse(block(A, d), rows)
+    T.form_coarse(block(A, d), rows, np.arange(T.coarse_nodes)[::-1].copy())
     assert not rows.changed.any()
 
 

@@ -115,9 +115,15 @@ def test_one_rank_hierarchy_is_the_serial_one(mesh):
         points, cells = d.gathered(level)
         assert np.array_equal(points, m.points) and np.array_equal(cells, m.cells)
         assert len(d.levels[level].ghosts) == 0
-    t = d.levels[-1].transfer
-    P = h.transfers[-1]
-    assert np.array_equal(t.ptr, P.ptr) and np.array_equal(t.parent, P.parent) and np.array_equal(t.weight, P.weight)
+    # the transfer's rows by global id (the local nodes are in (colour, global id) order)
+    lev, t, P = d.levels[-1], d.levels[-1].transfer, h.transfers[-1]
+    order = np.argsort(lev.gid[t.rows])
+    assert np.array_equal(lev.gid[t.rows][order], np.arange(len(order)))
+    ptr = np.r_[0, np.cumsum(np.diff(t.ptr)[order])]
+    entries = np.concatenate([np.arange(t.ptr[i], t.ptr[i + 1]) for i in order])
+    assert np.array_equal(ptr, P.ptr) and np.array_equal(t.parent_gid[entries], P.parent)
+    assert np.array_equal(t.weight[entries], P.weight)
+    assert np.array_equal(d.levels[-2].gid[t.parent[entries]], P.parent)  # the local parents are those nodes
 
 
 def test_hierarchy_refuses_bad_input():

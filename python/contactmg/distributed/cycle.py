@@ -42,7 +42,7 @@ def _any(comm, flag: bool) -> bool:
 
 def _colour_rows(comm, level) -> List[np.ndarray]:
     """The owned rows of each colour, with the number of colours the largest over the ranks."""
-    colour = colour_level(level, comm)
+    colour = level.colour if level.colour is not None else colour_level(level, comm)
     owned = level.owner == level.rank
     ncol = int(colour.max(initial=-1)) + 1
     if not is_serial(comm):

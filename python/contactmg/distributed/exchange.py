@@ -149,10 +149,23 @@ def exact_norm(x, comm=None) -> float:
     return float(np.sqrt(exact_dot(x, x, comm)))
 
 
+def local_index(gid: np.ndarray, want: np.ndarray) -> np.ndarray:
+    """The local index of each global id in `want` among the local nodes' ids `gid` (distinct, in
+    any order), -1 where this rank does not hold it."""
+    gid = np.asarray(gid, np.int64)
+    want = np.asarray(want, np.int64)
+    if not len(gid):
+        return np.full(len(want), -1, np.int64)
+    order = np.argsort(gid, kind="stable")
+    at = np.minimum(np.searchsorted(gid[order], want), len(gid) - 1)
+    idx = order[at]
+    return np.where(gid[idx] == want, idx, -1).astype(np.int64)
+
+
 @dataclass
 class Halo:
     """Who sends which owned nodes to whom, and where the ghosts of each owner are received: local
-    node indices, per neighbour rank in ascending rank order, each list in ascending global id.
+    node indices, per neighbour rank in ascending rank order, each list in the receiver's local order.
 
     update(v) gives every ghost row of v (n_local, ...) its owner's value, in one neighbourhood
     collective (MPI_Neighbor_alltoallv on a distributed graph of the neighbours), always in the same
@@ -167,13 +180,12 @@ class Halo:
 
     @classmethod
     def build(cls, comm, gid: np.ndarray, owner: np.ndarray) -> "Halo":
-        """The exchange lists of one level from each local node's global id (ascending) and owner
-        rank. Collective: each rank tells the owners which of their nodes it holds as ghosts."""
+        """The exchange lists of one level from each local node's global id and owner rank. Collective: each rank tells the owners which of their nodes it holds as ghosts."""
         comm = get_comm(comm)
         gid = np.asarray(gid, np.int64)
         owner = np.asarray(owner, np.int64)
-        if np.any(np.diff(gid) <= 0):
-            raise ValueError("the global ids of a halo must be strictly increasing")
+        if len(np.unique(gid)) != len(gid):
+            raise ValueError("the global ids of a halo must be distinct")
         ghost = np.flatnonzero(owner != comm.rank)
         recv = {int(r): ghost[owner[ghost] == r] for r in np.unique(owner[ghost])}
         if is_serial(comm):
@@ -185,9 +197,8 @@ class Halo:
         for r, want in enumerate(asked):
             if want is None:
                 continue
-            idx = np.searchsorted(gid, want)
-            if np.any(idx >= len(gid)) or np.any(gid[np.minimum(idx, len(gid) - 1)] != want) or \
-                    np.any(owner[idx] != comm.rank):
+            idx = local_index(gid, want)
+            if np.any(idx < 0) or np.any(owner[idx] != comm.rank):
                 raise RuntimeError(f"rank {r} holds ghosts that rank {comm.rank} does not own")
             send[r] = idx
         sources, destinations = sorted(recv), sorted(send)

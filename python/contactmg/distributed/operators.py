@@ -21,6 +21,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .comm import is_serial, op
+from .exchange import local_index
 
 
 def node_to_dof_rows(nodes: np.ndarray, d: int) -> np.ndarray:
@@ -65,8 +66,8 @@ def exchange_ghost_rows(comm, halo, M: sp.csr_matrix, owned_nodes_mask: np.ndarr
         ptr, gcols, vals = got
         ghost_rows = node_to_dof_rows(halo.recv[r], d)
         counts = np.diff(ptr)
-        J = np.searchsorted(col_gid, gcols // d)
-        if len(J) and (np.any(J >= len(col_gid)) or np.any(col_gid[np.minimum(J, len(col_gid) - 1)] != gcols // d)):
+        J = local_index(col_gid, gcols // d)
+        if np.any(J < 0):
             raise RuntimeError("a ghost row reaches a node this rank does not hold")  # pragma: no cover
         rows_all.append(np.repeat(ghost_rows, counts))
         cols_all.append(J * d + gcols % d)
@@ -127,11 +128,9 @@ def _exchange_z_rows(comm, fine_level, coarse_gid: np.ndarray, T, A) -> None:
         nodes, ptrs, cols = [empty], [np.zeros(1, np.int64)], [empty]
         for r in halo.sources:
             ptr, gcols = got[r]
-            J = np.minimum(np.searchsorted(coarse_gid, gcols), max(len(coarse_gid) - 1, 0))
-            held = (coarse_gid[J] == gcols) if len(coarse_gid) else np.zeros(len(gcols), bool)
             nodes.append(np.asarray(halo.recv[r], np.int64))
             ptrs.append(np.asarray(ptr[1:], np.int64) + ptrs[-1][-1])
-            cols.append(np.where(held, J, -1).astype(np.int64))
+            cols.append(local_index(coarse_gid, gcols))
         T.set_ghost_pattern(np.concatenate(nodes), np.concatenate(ptrs), np.concatenate(cols))
     got = comm.alltoall([T.z_values(A, halo.send[r]) if r in halo.send else None for r in range(comm.size)])
     if halo.sources:
@@ -155,7 +154,7 @@ def galerkin_rows(comm, fine_level, coarse_level, T, rows, d: int, A=None, mask=
         T.set_fine(A, np.ascontiguousarray(mask, np.uint8).ravel(), np.asarray(hess_nodes, np.int64),
                    np.ascontiguousarray(hess, float).reshape(-1, d, d))
     _exchange_z_rows(comm, fine_level, coarse_level.gid, T, A)
-    T.form_coarse(A, rows)
+    T.form_coarse(A, rows, np.argsort(coarse_level.gid).astype(np.int64))  # in ascending global id: fewer cache misses
 
 
 def rows_to_csr(rows, d: int) -> sp.csr_matrix:
