@@ -65,9 +65,10 @@ void bind_levels(py::module_& m) {
              return r;
            }, py::arg("x"), py::arg("b"), py::arg("owned"), "b - A x on the owned rows (blocks ascending), zero elsewhere")
       .def("sweep", [](C& c, py::array_t<double>& x, const DArr& b, const IArr& rows, bool forward, double omega, py::object lo,
-                       py::object hi, py::object bounded) {
+                       py::object hi, py::object bounded, int threads) {
              const Index n = c.n();
              if (!(omega > 0 && omega < 2)) throw InputError("omega must lie in (0, 2)");
+             if (threads < 1) throw InputError("threads must be >= 1");
              if (c.Dinv.size() != (std::size_t)(n * d * d)) throw InputError("sweep before invert");
              double* xx = writable_array(x, "x", n * d);
              require_shape(b, "b", {(py::ssize_t)n, d});
@@ -75,21 +76,36 @@ void bind_levels(py::module_& m) {
              const Index count = (Index)rows.size();
              for (Index q = 0; q < count; ++q)
                if (r[q] < 0 || r[q] >= n) throw InputError("a row to sweep is outside the level");
-             if (lo.is_none()) {
-               py::gil_scoped_release free;
-               gs_list<d>(c.A, c.Dinv.data(), nullptr, nullptr, nullptr, nullptr, b.data(), xx, omega, r, count, forward);
+             DArr l, h;
+             BArr bv;
+             if (!lo.is_none()) {
+               l = lo.cast<DArr>(), h = hi.cast<DArr>();
+               require_shape(l, "lo", {(py::ssize_t)n, d});
+               require_shape(h, "hi", {(py::ssize_t)n, d});
+               bv = bounded.cast<BArr>();
+               if (bv.size() != n) throw InputError("bounded has " + std::to_string(bv.size()) + " entries, " + std::to_string(n) + " expected");
+             }
+             const bool bnd = !lo.is_none();
+             const std::uint8_t* bp = bnd ? bv.data() : nullptr;
+             const std::uint8_t* in = bnd ? c.inert.data() : nullptr;
+             const double* lp = bnd ? l.data() : nullptr;
+             const double* hp = bnd ? h.data() : nullptr;
+             py::gil_scoped_release free;
+             if (threads == 1 || count < kSerialColourRows) {
+               gs_list<d>(c.A, c.Dinv.data(), bp, in, lp, hp, b.data(), xx, omega, r, count, forward);
                return;
              }
-             const DArr l = lo.cast<DArr>(), h = hi.cast<DArr>();
-             require_shape(l, "lo", {(py::ssize_t)n, d});
-             require_shape(h, "hi", {(py::ssize_t)n, d});
-             const BArr bv = bounded.cast<BArr>();
-             if (bv.size() != n) throw InputError("bounded has " + std::to_string(bv.size()) + " entries, " + std::to_string(n) + " expected");
-             py::gil_scoped_release free;
-             gs_list<d>(c.A, c.Dinv.data(), bv.data(), c.inert.data(), l.data(), h.data(), b.data(), xx, omega, r, count, forward);
+             // one colour's rows (not coupled): a chunk per thread, the bits of one thread
+             const Index chunk = (count + threads - 1) / threads;
+             ThreadScope team(threads);
+             parallel_for(threads, [&](Index t) {
+               const Index s0 = std::min(count, t * chunk), s1 = std::min(count, s0 + chunk);
+               gs_list<d>(c.A, c.Dinv.data(), bp, in, lp, hp, b.data(), xx, omega, r + s0, s1 - s0, true);
+             }, 1);
            }, py::arg("x"), py::arg("b"), py::arg("rows"), py::arg("forward"), py::arg("omega") = 1.0, py::arg("lo") = py::none(),
-           py::arg("hi") = py::none(), py::arg("bounded") = py::none(),
-           "one block (or, with bounds, projected) Gauss-Seidel pass over rows, x (n, d) in place")
+           py::arg("hi") = py::none(), py::arg("bounded") = py::none(), py::arg("threads") = 1,
+           "one block (or, with bounds, projected) Gauss-Seidel pass over rows, x (n, d) in place; threads > 1: rows "
+           "are one colour, updated on that many threads")
       .def("blocks", [](const C& c) {
              return py::make_tuple(to_numpy(c.A.indptr, {(py::ssize_t)c.A.indptr.size()}),
                                    to_numpy(c.A.indices, {(py::ssize_t)c.A.indices.size()}),

@@ -1,8 +1,9 @@
 // One rank's coarse-level kernels of the distributed cycle (python/contactmg/distributed/cycle.py):
 // the Galerkin rows P^T (M A M) P of the owned coarse nodes, the level's residual, restriction,
-// prolongation and monotone bound restriction. Nodes are local (owned and ghost) in ascending global
-// id, so "ascending local index" is "ascending global id" and every sum below is taken in an order
-// that does not depend on the partition: each value has the same bits on every number of ranks
+// prolongation and monotone bound restriction. Nodes are local (owned and ghost) in an order that is
+// the same global order on every rank (ascending (colour, global id), python/contactmg/distributed/
+// hierarchy.py), so every sum below, taken in ascending local index, runs in an order that does not
+// depend on the partition: each value has the same bits on every number of ranks
 // (docs/dev/decisions/0030-distributed-cycle.md). The ghost exchanges stay in Python (mpi4py); these
 // are the flat kernels between them.
 #pragma once

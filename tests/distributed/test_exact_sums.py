@@ -118,3 +118,14 @@ def test_bad_input_is_refused_with_a_clear_message():
         exact_dot(np.ones(2), np.ones(3))
     with pytest.raises(ValueError, match="one length"):
         _core.exact_dot_limbs(np.ones((2, 3)), np.ones(6))
+
+
+def test_a_dot_over_flagged_rows_is_the_dot_of_those_rows():
+    rng = np.random.default_rng(14)
+    x, y = wide(rng, 3000, -40, 40).reshape(-1, 3), wide(rng, 3000, -40, 40).reshape(-1, 3)
+    rows = (rng.random(1000) < 0.7).astype(np.uint8)
+    keep = rows.astype(bool)
+    assert local_fixed_point_dot(x, y, rows) == _numpy_fixed_point_dot(x[keep], y[keep])
+    assert exact_dot(x, y, rows=rows) == exact_dot(x[keep], y[keep])
+    with pytest.raises(ValueError, match="one flag per row"):
+        local_fixed_point_dot(x, y, rows[:-1])

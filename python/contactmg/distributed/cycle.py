@@ -5,7 +5,7 @@ where a row reads a neighbour's new value.
 - A Gauss-Seidel sweep runs colour by colour (colours of the hashed greedy rule, the same on any
   number of ranks), the owned rows of a colour by the core's kernels, then one halo exchange.
 - Restriction: the owners of the fine rows form the residual, the ghosts get it, and the owner of a
-  coarse row sums its fine rows in ascending global id. Bounds restrict by minima and maxima (exact).
+  coarse row sums its fine rows in ascending local index (a global order: hierarchy.py). Bounds restrict by minima and maxima (exact).
 - Prolongation: every local row (ghost rows are their owners' rows), so no exchange is needed.
 - Galerkin rows by their owners (operators.py), rebuilt when the truncation or a Hessian changes,
   only the rows whose inputs changed.
@@ -55,16 +55,17 @@ class CoarseLevel:
     written in place by the Galerkin kernel), the transfer from the level below (the core's
     DistributedTransfer) and the vectors of the cycle."""
 
-    def __init__(self, comm, level, below, d: int):
-        self.comm, self.level, self.d = comm, level, d
+    def __init__(self, comm, level, below, d: int, threads: int = 1):
+        self.comm, self.level, self.d, self.threads = comm, level, d, threads
         self.n = len(level.gid)
         self.owned = level.owner == level.rank
         self.owned_u8 = self.owned.astype(np.uint8)
         self.halo = None if is_serial(comm) else level.halo  # one rank: no ghosts, nothing to exchange
         self.colours = _colour_rows(comm, level)
-        # without exchanges between the colours a pass is one call over the colours in turn: the same
-        # rows in the same order (reversed backward), without a call per colour
-        self.order = None if self.halo is not None else np.concatenate(self.colours or [np.zeros(0, np.int64)])
+        # without exchanges between the colours (and on one thread) a pass is one call over the
+        # colours in turn: the same rows in the same order (reversed backward), without a call per colour
+        self.order = None if self.halo is not None or threads > 1 else \
+            np.concatenate(self.colours or [np.zeros(0, np.int64)])
         self.rows = (_core.CoarseRows2D if d == 2 else _core.CoarseRows3D)()
         self.transfer = None  # from the level below
         if below is not None:
@@ -116,11 +117,12 @@ class CoarseLevel:
             order = [self.order]
         else:
             order = self.colours if forward else self.colours[::-1]
+        threads = 1 if self.order is not None else self.threads  # a thread per chunk of one colour's rows
         for rows in order:
             if self.any_bounds:
-                self.rows.sweep(self.x, self.b, rows, forward, omega, self.lo, self.hi, self.bounded)
+                self.rows.sweep(self.x, self.b, rows, forward, omega, self.lo, self.hi, self.bounded, threads)
             else:
-                self.rows.sweep(self.x, self.b, rows, forward, omega)
+                self.rows.sweep(self.x, self.b, rows, forward, omega, threads=threads)
             if self.halo is not None:
                 self.halo.update(self.x)
 
@@ -132,7 +134,7 @@ class CoarseLevel:
         return r
 
     def memory_bytes(self) -> int:
-        """The bytes of the level's rows and smoother, its transfer with the Galerkin kernel's Z rows, and its vectors."""
+        """The bytes of the level's rows and smoother, its transfer with the ghosts' Z rows, and its vectors."""
         own = self.rows.memory_bytes() + (self.transfer.memory_bytes() if self.transfer is not None else 0)
         return int(own + self.x.nbytes + self.b.nbytes + self.lo.nbytes + self.hi.nbytes + self.bounded.nbytes)
 
@@ -141,10 +143,10 @@ class CoarseCorrection:
     """The coarse levels of one rank and the multilevel correction of the serial CoarseCycle: the
     core's kernels on each level, the cycle and the exchanges here."""
 
-    def __init__(self, comm, hierarchy, d: int, fine_transfer: sp.csr_matrix):
+    def __init__(self, comm, hierarchy, d: int, fine_transfer: sp.csr_matrix, threads: int = 1):
         self.comm, self.d = comm, d
         levels = hierarchy.levels
-        self.levels = [CoarseLevel(comm, levels[l], levels[l - 1] if l > 0 else None, d)
+        self.levels = [CoarseLevel(comm, levels[l], levels[l - 1] if l > 0 else None, d, threads)
                        for l in range(len(levels) - 1)]
         # onto the fine level from the top coarse level (rotated rows)
         self.fine_transfer = transfer_kernel(fine_transfer, levels[-1], levels[-2], d)
@@ -173,7 +175,7 @@ class CoarseCorrection:
 
     def memory_bytes(self) -> int:
         """The bytes of the coarse levels (rows, smoother, vectors), the transfers with the Galerkin
-        kernels' Z rows and patterns, and the gathered coarsest level."""
+        kernels' ghost Z rows, and the gathered coarsest level."""
         total = self.fine_transfer.memory_bytes() + sum(L.memory_bytes() for L in self.levels)
         if self.coarsest is not None:
             total += self.coarsest.memory_bytes()
@@ -261,7 +263,7 @@ class DistributedMonotoneStep:
         self.f = fine.core.load
         P = local_transfer(lev, hierarchy.levels[-2], d, comm)
         P = rotate_rows(P, fine.contact_nodes, fine.frames, d)
-        self.coarse = CoarseCorrection(comm, hierarchy, d, P)
+        self.coarse = CoarseCorrection(comm, hierarchy, d, P, opt.threads)
         self.built = None  # (mask, hessian) the coarse levels were built for
         self.phase_seconds = {k: 0.0 for k in ("pre_smooth", "linearize", "coarse_update", "coarse_correction",
                                                "post_smooth", "norm")}

@@ -1,11 +1,11 @@
-"""The operators of a distributed cycle on one rank over its local nodes (owned and ghost, in ascending
-global id): the prolongation rows of every local node (set up as scipy matrices, then handed to the
-core's DistributedTransfer), the Galerkin rows of every owned coarse node (the core's kernel on d x d
+"""The operators of a distributed cycle on one rank over its local nodes (owned and ghost): the
+prolongation rows of every local node (set up as scipy matrices, then handed to the core's
+DistributedTransfer), the Galerkin rows of every owned coarse node (the core's kernel on d x d
 blocks, cpp/mg/distributed_galerkin.hpp), and the coarsest level gathered onto every rank.
 
 Every sum is taken in an order that does not depend on the partition: a row's entries are stored by
-ascending global id (local indices ascend with it) and a product adds them in that order, so each
-row has the same bits on every number of ranks. A row that a rank needs but does not own (the
+ascending local index, which follows one global order of the nodes on every rank (hierarchy.py), and
+a product adds them in that order, so each row has the same bits on every number of ranks. A row that a rank needs but does not own (the
 prolongation and Galerkin rows of its ghost nodes) is computed by its owner and sent, never
 recomputed from a partial neighbourhood.
 
