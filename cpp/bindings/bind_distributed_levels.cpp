@@ -2,6 +2,7 @@
 // level's rows and smoother (CoarseRows*D), the transfer from the level below with the Galerkin rows
 // it forms (DistributedTransfer*D). Flat kernels of mg/distributed_galerkin.hpp; the ghost exchanges
 // between them stay in Python.
+#include <cstring>
 #include "bindings/common.hpp"
 #include "mg/distributed_galerkin.hpp"
 
@@ -106,6 +107,38 @@ void bind_levels(py::module_& m) {
            py::arg("hi") = py::none(), py::arg("bounded") = py::none(), py::arg("threads") = 1,
            "one block (or, with bounds, projected) Gauss-Seidel pass over rows, x (n, d) in place; threads > 1: rows "
            "are one colour, updated on that many threads")
+      .def("set_blocks", [](C& c, const IArr& indptr, const IArr& indices, const DArr& blocks) {
+             const Index n = (Index)indptr.size() - 1;
+             if (n < 0 || indptr.data()[0] != 0 || indptr.data()[n] != (Index)indices.size())
+               throw InputError("indptr and indices are not one block CSR pattern");
+             require_shape(blocks, "blocks", {(py::ssize_t)indices.size(), d, d});
+             for (Index i = 0; i < n; ++i)
+               for (Index k = indptr.data()[i]; k < indptr.data()[i + 1]; ++k) {
+                 const Index j = indices.data()[k];
+                 if (j < 0 || j >= n || (k > indptr.data()[i] && j <= indices.data()[k - 1]))
+                   throw InputError("a row's block columns must lie in 0..n-1, ascending");
+               }
+             const bool same = c.A.rows == n && std::equal(c.A.indptr.begin(), c.A.indptr.end(), indptr.data()) &&
+                               std::equal(c.A.indices.begin(), c.A.indices.end(), indices.data(),
+                                          [](ColIndex a, Index b) { return (Index)a == b; });
+             c.changed.assign(n, same ? 0 : 1);
+             if (!same) {
+               c.A.rows = c.A.cols = n;
+               c.A.indptr.assign(indptr.data(), indptr.data() + n + 1);
+               c.A.indices.assign(indices.data(), indices.data() + indices.size());
+               c.A.values.assign(indices.size() * d * d, 0.0);
+               c.A.find_diagonal();
+             }
+             for (Index i = 0; i < n; ++i) {
+               const Index b0 = c.A.indptr[i] * d * d, len = (c.A.indptr[i + 1] - c.A.indptr[i]) * d * d;
+               if (std::memcmp(c.A.values.data() + b0, blocks.data() + b0, sizeof(double) * len) != 0) {
+                 std::copy(blocks.data() + b0, blocks.data() + b0 + len, c.A.values.data() + b0);
+                 c.changed[i] = 1;
+               }
+             }
+           }, py::arg("indptr"), py::arg("indices"), py::arg("blocks"),
+           "the rows from a block CSR matrix (n x n, columns ascending per row); changed marks the rows whose bits changed")
+      .def("clear_changed", [](C& c) { std::fill(c.changed.begin(), c.changed.end(), 0); }, "no row changed")
       .def("blocks", [](const C& c) {
              return py::make_tuple(to_numpy(c.A.indptr, {(py::ssize_t)c.A.indptr.size()}),
                                    to_numpy(c.A.indices, {(py::ssize_t)c.A.indices.size()}),

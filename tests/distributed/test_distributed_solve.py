@@ -27,7 +27,7 @@ def one_rank(name):
 
 
 def serial(name):
-    example, levels, cell, friction, _ = CASES[name]
+    example, levels, cell, friction, _, _ = CASES[name]
     make = hertz_problem if example.__name__ == "hertz" else sphere_problem
     p = make(cell, levels, 0.0)
     if not isinstance(friction, type(p.friction)) or isinstance(friction, (Tresca, Coulomb)):
@@ -131,3 +131,12 @@ def test_threads_per_rank_give_the_bits_of_one_thread():
         got[threads] = (r.u, [h["correction_norm"] for h in r.history])
     assert len(got[1][1]) == 5 and got[1][1] == got[2][1]
     assert np.array_equal(got[1][0], got[2][0])
+
+
+def test_whole_levels_threshold_is_checked():
+    from contactmg.distributed import DistributedError
+    from contactmg.examples.distributed import hertz
+    problem = hertz(2, "triangle", Coulomb(0.4), SerialComm())
+    for bad in (-1, 2.5, True):
+        with pytest.raises(DistributedError, match="whole_below must be an integer >= 0"):
+            problem.solve(OPTIONS, whole_below=bad)

@@ -49,7 +49,7 @@ def test_hashed_colours_are_the_distributed_colours(example, levels, cell, stora
 
 @pytest.mark.parametrize("name", sorted(CASES))
 def test_hashed_serial_solve_is_the_distributed_solve(name):
-    example, levels, cell, friction, _ = CASES[name]
+    example, levels, cell, friction, _, _ = CASES[name]
     got = solve_case(name, SerialComm())
     ref = contactmg.Solver(serial_problem(example, levels, cell, friction), OPTIONS.replace(method="nmg", ordering="hashed")).solve()
     assert got["converged"] and ref.converged

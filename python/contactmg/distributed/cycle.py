@@ -31,6 +31,7 @@ from .comm import is_serial, op
 from .exchange import exact_dot, exact_dots, exact_sum
 from .operators import (GatheredCoarsest, galerkin_rows, local_transfer, rotate_rows, rows_to_csr,
                         transfer_kernel)
+from .replicated import REPLICATE_NODES, Whole, replicated_count
 
 INF = np.inf
 COARSEST_MAX_SWEEPS = 50  # the serial coarsest solve's (solver_options.hpp kCoarsestMaxSweeps)
@@ -50,6 +51,27 @@ def _colour_rows(comm, level) -> List[np.ndarray]:
     return [np.flatnonzero(owned & (colour == c)).astype(np.int64) for c in range(ncol)]
 
 
+def _split(colours: List[np.ndarray], reads_ghost: np.ndarray) -> List[tuple]:
+    """Each colour's rows as (those that read no ghost, those that do): the first are swept while the
+    ghosts of the colour before are on their way."""
+    return [(rows[~reads_ghost[rows]], rows[reads_ghost[rows]]) for rows in colours]
+
+
+def _overlapped_sweep(split, forward: bool, sweep_rows, start) -> None:
+    """One coloured pass with the exchanges overlapped: per colour the rows that read no ghost, the
+    ghosts of the colour before written, the rows that read ghosts, the exchange begun. Rows of one
+    colour do not read each other, so the values are those of the plain pass."""
+    pending = None
+    for interior, boundary in (split if forward else split[::-1]):
+        sweep_rows(interior)
+        if pending is not None:
+            pending.finish()
+        sweep_rows(boundary)
+        pending = start()
+    if pending is not None:
+        pending.finish()
+
+
 class CoarseLevel:
     """A coarse level on one rank: its nodes, colours, its rows and smoother (the core's CoarseRows,
     written in place by the Galerkin kernel), the transfer from the level below (the core's
@@ -61,12 +83,13 @@ class CoarseLevel:
         self.owned = level.owner == level.rank
         self.owned_u8 = self.owned.astype(np.uint8)
         self.halo = None if is_serial(comm) else level.halo  # one rank: no ghosts, nothing to exchange
-        self.colours = _colour_rows(comm, level)
+        self.colours = _colour_rows(comm, level) if below is not None else []  # the coarsest is solved, not swept
         # without exchanges between the colours (and on one thread) a pass is one call over the
         # colours in turn: the same rows in the same order (reversed backward), without a call per colour
         self.order = None if self.halo is not None or threads > 1 else \
             np.concatenate(self.colours or [np.zeros(0, np.int64)])
         self.rows = (_core.CoarseRows2D if d == 2 else _core.CoarseRows3D)()
+        self.split = None  # each colour's rows that read no ghost and those that do
         self.transfer = None  # from the level below
         if below is not None:
             self.transfer = transfer_kernel(local_transfer(level, below, d, comm), level, below, d)
@@ -112,19 +135,31 @@ class CoarseLevel:
         self.any_bounds = _any(self.comm, bool(np.any(self.bounded & self.owned_u8)))
 
     def sweep(self, forward: bool, omega: float) -> None:
-        """One (projected) Gauss-Seidel pass, colour by colour, the ghosts exchanged after each."""
+        """One (projected) Gauss-Seidel pass, colour by colour, the ghosts exchanged after each
+        (_overlapped_sweep)."""
         if self.order is not None:
             order = [self.order]
         else:
             order = self.colours if forward else self.colours[::-1]
         threads = 1 if self.order is not None else self.threads  # a thread per chunk of one colour's rows
-        for rows in order:
+
+        def sweep_rows(rows):
             if self.any_bounds:
                 self.rows.sweep(self.x, self.b, rows, forward, omega, self.lo, self.hi, self.bounded, threads)
             else:
                 self.rows.sweep(self.x, self.b, rows, forward, omega, threads=threads)
-            if self.halo is not None:
-                self.halo.update(self.x)
+
+        if self.halo is None:
+            for rows in order:
+                sweep_rows(rows)
+            return
+        if self.split is None:  # a row reads a ghost where its pattern has one (fixed after the first build)
+            indptr, indices, _ = self.rows.blocks()
+            ghost_block = ~self.owned[indices]
+            reads = np.zeros(self.n, bool)
+            reads[np.repeat(np.arange(self.n), np.diff(indptr))[ghost_block]] = True
+            self.split = _split(self.colours, reads)
+        _overlapped_sweep(self.split, forward, sweep_rows, lambda: self.halo.start(self.x))
 
     def residual(self) -> np.ndarray:
         """b - A x on the owned rows, the ghosts' from their owners."""
@@ -141,45 +176,84 @@ class CoarseLevel:
 
 class CoarseCorrection:
     """The coarse levels of one rank and the multilevel correction of the serial CoarseCycle: the
-    core's kernels on each level, the cycle and the exchanges here."""
+    core's kernels on each level, the cycle and the exchanges here. The smallest coarse levels are
+    held whole by every rank (replicated.py): levels[:k] are whole, levels[k:] distributed."""
 
-    def __init__(self, comm, hierarchy, d: int, fine_transfer: sp.csr_matrix, threads: int = 1):
+    def __init__(self, comm, hierarchy, d: int, fine_transfer: sp.csr_matrix, threads: int = 1,
+                 whole_below: int = REPLICATE_NODES):
         self.comm, self.d = comm, d
-        levels = hierarchy.levels
-        self.levels = [CoarseLevel(comm, levels[l], levels[l - 1] if l > 0 else None, d, threads)
-                       for l in range(len(levels) - 1)]
+        self.dist = levels = hierarchy.levels
+        self.k = replicated_count(comm, hierarchy, whole_below)
+        self.whole: List[Whole] = []
+        for l in range(self.k):
+            self.whole.append(Whole(comm, levels[l], self.whole[-1] if l else None, l == 0))
+        self.levels = []
+        for l in range(len(levels) - 1):
+            if l < self.k:
+                W = self.whole[l]
+                self.levels.append(CoarseLevel(W.serial, W.level, self.whole[l - 1].level if l else None, d, threads))
+            else:
+                self.levels.append(CoarseLevel(comm, levels[l], levels[l - 1] if l > 0 else None, d, threads))
+        # the Galerkin rows of the top whole level as the distributed level's owners form them
+        self.boundary_rows = (_core.CoarseRows2D if d == 2 else _core.CoarseRows3D)() if self.k else None
         # onto the fine level from the top coarse level (rotated rows)
         self.fine_transfer = transfer_kernel(fine_transfer, levels[-1], levels[-2], d)
         self.coarsest: Optional[GatheredCoarsest] = None
+
+    def _to_whole(self, l: int) -> None:
+        """Whole level l's rows from the boundary rows every rank formed for its owned nodes."""
+        C = self.levels[l]
+        if C.rows.n == 0 or _any(self.comm, self.boundary_rows.changed.any()):
+            C.rows.set_blocks(*self.whole[l].gather_rows(self.boundary_rows, self.d))
+        else:
+            C.rows.clear_changed()
 
     def build(self, fine, mask: np.ndarray, hess_nodes: np.ndarray, hess: np.ndarray) -> None:
         """Every coarse matrix for the fine matrix with the Hessian blocks `hess` (k, d, d) added at
         the owned nodes hess_nodes, and the truncation mask (per fine dof, 0/1). Rows whose inputs did
         not change since the last build are kept (they would get the same bits). Collective."""
-        d, top = self.d, len(self.levels) - 1
+        d, top, k = self.d, len(self.levels) - 1, self.k
         C = self.levels[top]
         # the fine level's own BlockMatrix (a view): no second fine matrix
-        galerkin_rows(self.comm, fine.level, C.level, self.fine_transfer, C.rows, d, A=fine.core.matrix,
-                      mask=mask, hess_nodes=hess_nodes, hess=hess)
+        galerkin_rows(self.comm, fine.level, self.dist[top], self.fine_transfer, C.rows if top >= k else self.boundary_rows,
+                      d, A=fine.core.matrix, mask=mask, hess_nodes=hess_nodes, hess=hess)
+        if top < k:
+            self._to_whole(top)
         C.refresh()
         for l in range(top, 0, -1):
             L, below = self.levels[l], self.levels[l - 1]
-            galerkin_rows(self.comm, L.level, below.level, L.transfer, below.rows, d, above=L.rows)
+            if l - 1 >= k:  # both distributed
+                galerkin_rows(self.comm, L.level, below.level, L.transfer, below.rows, d, above=L.rows)
+            elif l >= k:  # the boundary: the owners' rows, gathered whole
+                galerkin_rows(self.comm, L.level, self.dist[l - 1], L.transfer, self.boundary_rows, d, above=L.rows)
+                self._to_whole(l - 1)
+            else:  # both whole: one rank's code
+                galerkin_rows(L.comm, L.level, below.level, L.transfer, below.rows, d, above=L.rows)
             below.refresh()
         L0 = self.levels[0]
         if self.coarsest is None:
-            self.coarsest = GatheredCoarsest(self.comm, L0.level, d)
+            self.coarsest = GatheredCoarsest(L0.comm, L0.level, d)
             self.coarsest.set_matrix(rows_to_csr(L0.rows, d))
-        elif _any(self.comm, L0.rows.changed.any()):
+        elif _any(L0.comm, L0.rows.changed.any()):
             self.coarsest.set_matrix(rows_to_csr(L0.rows, d))
 
     def memory_bytes(self) -> int:
         """The bytes of the coarse levels (rows, smoother, vectors), the transfers with the Galerkin
         kernels' ghost Z rows, and the gathered coarsest level."""
         total = self.fine_transfer.memory_bytes() + sum(L.memory_bytes() for L in self.levels)
+        if self.boundary_rows is not None:
+            total += self.boundary_rows.memory_bytes()
         if self.coarsest is not None:
             total += self.coarsest.memory_bytes()
         return int(total)
+
+    def _down(self, l: int, values: np.ndarray) -> np.ndarray:
+        """Restricted values (owned rows of level l's distributed numbering) as level l holds them."""
+        return self.whole[l].gather(values) if l < self.k else values
+
+    def _up(self, l: int, x: np.ndarray) -> np.ndarray:
+        """Level l's correction at the local nodes of its distributed numbering."""
+        return np.ascontiguousarray(x[self.whole[l].local]) if l < self.k else x
 
     def correction(self, opt, r_fine: np.ndarray, mask: np.ndarray, lo_f: np.ndarray, hi_f: np.ndarray,
                    bounded: bool) -> np.ndarray:
@@ -188,9 +262,9 @@ class CoarseCorrection:
         top = len(self.levels) - 1
         C, T = self.levels[top], self.fine_transfer
         m = np.ascontiguousarray(mask, np.uint8)
-        C.set_b(T.restrict_residual(r_fine, m))  # sums in ascending fine node
+        C.set_b(self._down(top, T.restrict_residual(r_fine, m)))  # sums in ascending fine node
         if bounded:
-            C.set_bounds(*T.restrict_bounds(lo_f, hi_f, mask=m))
+            C.set_bounds(*(self._down(top, v) for v in T.restrict_bounds(lo_f, hi_f, mask=m)))
         else:
             C.clear_bounds()
         C.set_bounded(bounded)
@@ -198,25 +272,29 @@ class CoarseCorrection:
         self._cycle(opt, top, opt.cycle)
         if opt.cycle != "V":
             self._cycle(opt, top, "V" if opt.cycle == "F" else "W")
-        return T.prolong(C.x, m).ravel()
+        return T.prolong(self._up(top, C.x), m).ravel()
 
     def _cycle(self, opt, l: int, kind: str) -> None:
         if l == 0:
             self._solve_coarsest(opt)
             return
         L, C = self.levels[l], self.levels[l - 1]
+        # from a distributed level onto a whole one: the owned rows gathered, the correction read whole
+        boundary = l >= self.k > l - 1
         for _ in range(opt.nu1):
             L.sweep(True, opt.omega)
         for v in range(1 if kind == "V" else 2):
-            C.set_b(L.transfer.restrict_residual(L.residual()))
+            b = L.transfer.restrict_residual(L.residual())
+            C.set_b(self.whole[l - 1].gather(b) if boundary else b)
             if L.any_bounds:
-                C.set_bounds(*L.transfer.restrict_bounds(L.lo, L.hi, x=L.x, rows=L.bounded))
+                bounds = L.transfer.restrict_bounds(L.lo, L.hi, x=L.x, rows=L.bounded)
+                C.set_bounds(*((self.whole[l - 1].gather(v) for v in bounds) if boundary else bounds))
             else:
                 C.clear_bounds()
             C.set_bounded(L.any_bounds)
             C.x[:] = 0.0
             self._cycle(opt, l - 1, "V" if (kind == "F" and v == 1) else kind)
-            L.transfer.prolong_add(C.x, L.x)
+            L.transfer.prolong_add(self._up(l - 1, C.x) if boundary else C.x, L.x)
         for _ in range(opt.nu2):
             L.sweep(False, opt.omega_post)
 
@@ -260,10 +338,15 @@ class DistributedMonotoneStep:
         self.halo = None if is_serial(comm) else lev.halo  # one rank: no ghosts, nothing to exchange
         self.colours = _colour_rows(comm, lev)
         self.order = np.concatenate(self.colours or [np.zeros(0, np.int64)])
+        if self.halo is not None:  # a node reads a ghost where it shares a cell with one (the matrix pattern)
+            reads = np.zeros(self.n, bool)
+            cells = lev.cells[(lev.owner[lev.cells] != lev.rank).any(axis=1)]
+            reads[cells] = True
+            self.split = _split(self.colours, reads)
         self.f = fine.core.load
         P = local_transfer(lev, hierarchy.levels[-2], d, comm)
         P = rotate_rows(P, fine.contact_nodes, fine.frames, d)
-        self.coarse = CoarseCorrection(comm, hierarchy, d, P, opt.threads)
+        self.coarse = CoarseCorrection(comm, hierarchy, d, P, opt.threads, opt.whole_below)
         self.built = None  # (mask, hessian) the coarse levels were built for
         self.phase_seconds = {k: 0.0 for k in ("pre_smooth", "linearize", "coarse_update", "coarse_correction",
                                                "post_smooth", "norm")}
@@ -290,11 +373,13 @@ class DistributedMonotoneStep:
         if self.halo is None and self.opt.threads == 1:  # no exchange between the colours: one call, the same rows in order
             self.fine.core.sweep(u, self.order, forward, omega, 1)
             return
-        order = self.colours if forward else self.colours[::-1]
-        for rows in order:
-            self.fine.core.sweep(u, rows, forward, omega, self.opt.threads)
-            if self.halo is not None:
-                self.halo.update(u)
+        core, threads = self.fine.core, self.opt.threads
+        if self.halo is None:
+            for rows in (self.colours if forward else self.colours[::-1]):
+                core.sweep(u, rows, forward, omega, threads)
+            return
+        _overlapped_sweep(self.split, forward, lambda rows: core.sweep(u, rows, forward, omega, threads),
+                          lambda: self.halo.start(u))
 
     def linearize(self, u: np.ndarray):
         """mask (n*d), node bounds lo/hi (n, d; +-inf away from the contact nodes), the Hessian

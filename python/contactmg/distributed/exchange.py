@@ -220,9 +220,46 @@ class Halo:
             raise TypeError("a halo exchanges C-contiguous float64 arrays")
         width = int(np.prod(values.shape[1:], dtype=np.int64))
         rows = values.reshape(len(values), width)
-        for r, block in zip(self.sources, self._exchange(lambda idx: rows[idx], width)):
-            rows[self.recv[r]] = block
+        # the sweeps exchange after every colour: one gather, one exchange, one scatter
+        send_all, recv_all = self._all()
+        sendbuf = np.ascontiguousarray(rows[send_all]).ravel()
+        recvbuf = np.empty(len(recv_all) * width)
+        self._alltoallv(sendbuf, recvbuf, width)
+        rows[recv_all] = recvbuf.reshape(-1, width)
         return values
+
+    def start(self, values: np.ndarray) -> "PendingUpdate":
+        """update(values) begun: the owned rows are packed now, the ghost rows written by finish().
+        Between the two the caller may change owned rows (the values sent are those at start) but
+        must not read ghost rows. Lets a sweep update the rows that read no ghost while the ghost
+        values are on their way."""
+        if self._graph is None:
+            return PendingUpdate(None, None, None, None)
+        width = int(np.prod(values.shape[1:], dtype=np.int64))
+        rows = values.reshape(len(values), width)
+        send_all, recv_all = self._all()
+        sendbuf = np.ascontiguousarray(rows[send_all]).ravel()
+        recvbuf = np.empty(len(recv_all) * width)
+        MPI = mpi_module()
+        send_counts = [len(self.send[r]) * width for r in self.destinations]
+        recv_counts = [len(self.recv[r]) * width for r in self.sources]
+        request = self._graph.Ineighbor_alltoallv([sendbuf, (send_counts, None), MPI.DOUBLE],
+                                                  [recvbuf, (recv_counts, None), MPI.DOUBLE])
+        return PendingUpdate(request, (sendbuf, recvbuf), rows, recv_all)
+
+    def _all(self):
+        """Every destination's send rows and every source's ghost rows, each in rank order."""
+        if getattr(self, "_lists", None) is None:
+            cat = lambda parts: np.concatenate(parts).astype(np.int64) if parts else np.zeros(0, np.int64)  # noqa: E731
+            self._lists = (cat([self.send[r] for r in self.destinations]), cat([self.recv[r] for r in self.sources]))
+        return self._lists
+
+    def _alltoallv(self, sendbuf: np.ndarray, recvbuf: np.ndarray, width: int) -> None:
+        MPI = mpi_module()
+        send_counts = [len(self.send[r]) * width for r in self.destinations]
+        recv_counts = [len(self.recv[r]) * width for r in self.sources]
+        self._graph.Neighbor_alltoallv([sendbuf, (send_counts, None), MPI.DOUBLE],
+                                       [recvbuf, (recv_counts, None), MPI.DOUBLE])
 
     def update_many(self, *arrays: np.ndarray) -> None:
         """update() of several arrays of one length (rows = local nodes; any dtype whose values a
@@ -243,14 +280,11 @@ class Halo:
     def _exchange(self, pick, width: int) -> List[np.ndarray]:
         """Sends pick(rows) ((k, width) floats) of the rows each destination holds as ghosts; returns
         the blocks received from each source, in the order of self.sources."""
-        MPI = mpi_module()
-        send_counts = [len(self.send[r]) * width for r in self.destinations]
         recv_counts = [len(self.recv[r]) * width for r in self.sources]
         sendbuf = np.concatenate([np.ascontiguousarray(pick(self.send[r]), float).ravel() for r in self.destinations]) \
             if self.destinations else np.zeros(0)
         recvbuf = np.empty(sum(recv_counts))
-        self._graph.Neighbor_alltoallv([sendbuf, (send_counts, None), MPI.DOUBLE],
-                                       [recvbuf, (recv_counts, None), MPI.DOUBLE])
+        self._alltoallv(sendbuf, recvbuf, width)
         blocks, start = [], 0
         for c in recv_counts:
             blocks.append(recvbuf[start:start + c].reshape(-1, width))
@@ -262,3 +296,17 @@ class Halo:
         if self._graph is not None:
             self._graph.Free()
             self._graph = None
+
+
+class PendingUpdate:
+    """A halo update on its way (Halo.start); finish() waits and writes the ghost rows."""
+
+    def __init__(self, request, buffers, rows, recv_all):
+        self.request, self.buffers, self.rows, self.recv_all = request, buffers, rows, recv_all
+
+    def finish(self) -> None:
+        if self.request is None:
+            return
+        self.request.Wait()
+        self.rows[self.recv_all] = self.buffers[1].reshape(len(self.recv_all), -1)
+        self.request = None
