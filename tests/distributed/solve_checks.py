@@ -10,12 +10,12 @@ from contactmg.model.friction import Coulomb, Frictionless, Tresca
 from contactmg.solve.options import SolverOptions
 
 # name: (example, levels, cell, friction, partition: None (METIS) or "scattered", whole_below: the
-# coarse levels of at most so many nodes held whole by every rank: all of them (None, the default), a
-# boundary between whole and distributed levels, or none (0)); the Coulomb cases have sliding nodes,
-# so their cycles are Anderson-mixed
+# coarse levels of at most so many nodes held whole by every rank: all of them (10**9), a boundary
+# between whole and distributed levels, none (0), or the default rule (None)); the Coulomb cases have
+# sliding nodes, so their cycles are Anderson-mixed
 CASES = {
     "hertz-triangle-coulomb": (hertz, 4, "triangle", Coulomb(0.4), None, 100),
-    "hertz-quad-tresca": (hertz, 3, "quad", Tresca(0.02), None, None),
+    "hertz-quad-tresca": (hertz, 3, "quad", Tresca(0.02), None, 10**9),
     "hertz-triangle-frictionless-scattered": (hertz, 3, "triangle", Frictionless(), "scattered", 0),
     "sphere-tetra-coulomb": (sphere, 2, "tetra", Coulomb(0.4), None, 1000),
     "sphere-hexahedron-tresca": (sphere, 2, "hexahedron", Tresca(0.002), None, None),

@@ -138,5 +138,5 @@ def test_whole_levels_threshold_is_checked():
     from contactmg.examples.distributed import hertz
     problem = hertz(2, "triangle", Coulomb(0.4), SerialComm())
     for bad in (-1, 2.5, True):
-        with pytest.raises(DistributedError, match="whole_below must be an integer >= 0"):
+        with pytest.raises(DistributedError, match="whole_below must be an integer >= 0 or None"):
             problem.solve(OPTIONS, whole_below=bad)

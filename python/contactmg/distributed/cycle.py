@@ -31,7 +31,7 @@ from .comm import is_serial, op
 from .exchange import exact_dot, exact_dots, exact_sum
 from .operators import (GatheredCoarsest, galerkin_rows, local_transfer, rotate_rows, rows_to_csr,
                         transfer_kernel)
-from .replicated import REPLICATE_NODES, Whole, replicated_count
+from .replicated import Whole, replicated_count
 
 INF = np.inf
 COARSEST_MAX_SWEEPS = 50  # the serial coarsest solve's (solver_options.hpp kCoarsestMaxSweeps)
@@ -180,7 +180,7 @@ class CoarseCorrection:
     held whole by every rank (replicated.py): levels[:k] are whole, levels[k:] distributed."""
 
     def __init__(self, comm, hierarchy, d: int, fine_transfer: sp.csr_matrix, threads: int = 1,
-                 whole_below: int = REPLICATE_NODES):
+                 whole_below: Optional[int] = None):
         self.comm, self.d = comm, d
         self.dist = levels = hierarchy.levels
         self.k = replicated_count(comm, hierarchy, whole_below)

@@ -27,7 +27,6 @@ from ..solve.options import DEFAULT_OMEGA, SolverOptions, options_from
 from .comm import get_comm, is_serial, op, raise_together
 from .cycle import DistributedMonotoneStep
 from .fine_level import LocalFine, check_description
-from .replicated import REPLICATE_NODES
 
 # a stop on the correction norm is confirmed by one more sweep moving the iterate by at most this
 # many times the tolerance (loop_solver.hpp's kSweepCheckFactor)
@@ -49,7 +48,7 @@ class DistributedOptions:
     rtol: float
     max_cycles: int
     threads: int = 1  # per rank: the rows of one colour on this many threads
-    whole_below: int = REPLICATE_NODES  # coarse levels of at most this many nodes are held whole by every rank
+    whole_below: Optional[int] = None  # coarse levels of at most this many nodes are held whole (None: by size and share)
 
 
 def resolve(options, cell_type: str) -> DistributedOptions:
@@ -178,18 +177,20 @@ class DistributedProblem:
         return self.fine.law
 
     def solve(self, options=None, progress: Optional[Callable[[dict], None]] = None,
-              whole_below: int = REPLICATE_NODES) -> DistributedResult:
+              whole_below: Optional[int] = None) -> DistributedResult:
         """Truncated monotone multigrid from u = 0 until ||u^{k+1} - u^k||_A meets the stop of
         `options` (SolverOptions: tol / rtol, cycle, nu1, nu2, omega, max_cycles), confirmed by one
         more sweep. `progress(record)` is called on rank 0 after each cycle. The coarse levels of at
         most `whole_below` global nodes (and all below them) are held whole by every rank and swept
-        without exchanges (0: none); the answer does not depend on it. Collective."""
+        without exchanges (0: none; None: the small levels whose whole size is a small share of a
+        rank's fine level, replicated.py); the answer does not depend on it. Collective."""
         comm = self.comm
         with raise_together(comm):
             opt = resolve(options, self.hierarchy.cell_type)
-            if isinstance(whole_below, bool) or not isinstance(whole_below, (int, np.integer)) or whole_below < 0:
-                raise ValueError(f"whole_below must be an integer >= 0, got {whole_below!r}")
-            opt.whole_below = int(whole_below)
+            if whole_below is not None and (isinstance(whole_below, bool) or not isinstance(whole_below, (int, np.integer))
+                                            or whole_below < 0):
+                raise ValueError(f"whole_below must be an integer >= 0 or None, got {whole_below!r}")
+            opt.whole_below = None if whole_below is None else int(whole_below)
         t0 = time.perf_counter()
         step = DistributedMonotoneStep(comm, self.fine, self.hierarchy, opt)
         build = time.perf_counter() - t0

@@ -17,7 +17,7 @@ from typing import Optional
 
 import numpy as np
 
-from .comm import SerialComm
+from .comm import SerialComm, op
 from .hierarchy import LocalTransfer
 
 # The default size below which a coarse level is held whole by every rank (with every level below
@@ -25,14 +25,29 @@ from .hierarchy import LocalTransfer
 REPLICATE_NODES = 8192
 
 
-def replicated_count(comm, hierarchy, whole_below: int = REPLICATE_NODES) -> int:
+# ... and while the whole levels together have at most this share of the nodes a rank owns on the
+# fine level: every rank holds them in full, and on the 3D sphere two ranks holding its two coarse
+# levels (6,365 nodes, their Galerkin rows denser than the fine rows) held 1.27 times the serial
+# bytes per dof
+WHOLE_SHARE = 1 / 32
+
+
+def replicated_count(comm, hierarchy, whole_below: Optional[int] = None) -> int:
     """How many of the coarse levels (levels 0, 1, ...; never the fine level) every rank holds whole:
-    those of at most whole_below global nodes; none on one rank (every level is whole there)."""
+    from the coarsest up, those of at most whole_below global nodes; by default (None) those of at
+    most REPLICATE_NODES while all of them together have at most WHOLE_SHARE of the fine nodes the
+    smallest rank owns. None on one rank (every level is whole there). Collective."""
     if comm.size == 1:
         return 0
+    budget = np.inf
+    if whole_below is None:
+        fine = hierarchy.levels[-1]
+        budget = WHOLE_SHARE * comm.allreduce(int(np.count_nonzero(fine.owner == fine.rank)), op=op(comm, "MIN"))
+        whole_below = REPLICATE_NODES
     sizes = [lev.num_global_nodes for lev in hierarchy.levels[:-1]]
-    k = 0
-    while k < len(sizes) and sizes[k] <= whole_below:
+    k, total = 0, 0
+    while k < len(sizes) and sizes[k] <= whole_below and total + sizes[k] <= budget:
+        total += sizes[k]
         k += 1
     return k
 
