@@ -17,6 +17,7 @@ from typing import Optional
 
 import numpy as np
 
+from .colouring import _neighbours
 from .comm import SerialComm, op
 from .hierarchy import LocalTransfer
 
@@ -25,29 +26,43 @@ from .hierarchy import LocalTransfer
 REPLICATE_NODES = 8192
 
 
-# ... and while the whole levels together have at most this share of the nodes a rank owns on the
-# fine level: every rank holds them in full, and on the 3D sphere two ranks holding its two coarse
-# levels (6,365 nodes, their Galerkin rows denser than the fine rows) held 1.27 times the serial
-# bytes per dof
-WHOLE_SHARE = 1 / 32
+# ... and while the whole levels together hold at most this share of the matrix blocks a rank holds
+# on the fine level (a level's blocks: its pairs of nodes sharing a cell, which is the pattern of its
+# Galerkin rows on uniform hierarchies). Every rank holds those levels in full: on the 3D sphere, two
+# ranks holding both coarse levels (6,365 nodes, with rows denser than the fine level's) held 1.27
+# times the serial bytes per dof.
+WHOLE_SHARE = 1 / 8
+
+
+def _owned_blocks(level) -> int:
+    """The matrix blocks of the level's owned rows: the pairs of nodes that share a cell (an owned
+    node has all its cells locally), each node with itself."""
+    i, _ = _neighbours(level.cells, len(level.gid))
+    owned = level.owner == level.rank
+    return int(np.count_nonzero(owned[i]) + np.count_nonzero(owned))
 
 
 def replicated_count(comm, hierarchy, whole_below: Optional[int] = None) -> int:
     """How many of the coarse levels (levels 0, 1, ...; never the fine level) every rank holds whole:
     from the coarsest up, those of at most whole_below global nodes; by default (None) those of at
-    most REPLICATE_NODES while all of them together have at most WHOLE_SHARE of the fine nodes the
-    smallest rank owns. None on one rank (every level is whole there). Collective."""
+    most REPLICATE_NODES while all of them together hold at most WHOLE_SHARE of the fine matrix
+    blocks of the rank that holds the fewest. None on one rank (every level is whole there).
+    Collective."""
     if comm.size == 1:
         return 0
+    levels = hierarchy.levels[:-1]
     budget = np.inf
+    cost = [0] * len(levels)
     if whole_below is None:
-        fine = hierarchy.levels[-1]
-        budget = WHOLE_SHARE * comm.allreduce(int(np.count_nonzero(fine.owner == fine.rank)), op=op(comm, "MIN"))
         whole_below = REPLICATE_NODES
-    sizes = [lev.num_global_nodes for lev in hierarchy.levels[:-1]]
+        budget = WHOLE_SHARE * comm.allreduce(_owned_blocks(hierarchy.levels[-1]), op=op(comm, "MIN"))
+        for l, lev in enumerate(levels):
+            if lev.num_global_nodes > whole_below:
+                break
+            cost[l] = comm.allreduce(_owned_blocks(lev), op=op(comm, "SUM"))
     k, total = 0, 0
-    while k < len(sizes) and sizes[k] <= whole_below and total + sizes[k] <= budget:
-        total += sizes[k]
+    while k < len(levels) and levels[k].num_global_nodes <= whole_below and total + cost[k] <= budget:
+        total += cost[k]
         k += 1
     return k
 
