@@ -1,7 +1,7 @@
 // One rank's part of a distributed cycle (python/contactmg/distributed/cycle.py): its fine level as a
 // ContactProblem over its nodes and one layer of ghosts, swept on a given set of rows (the owned rows
-// of one colour, between two ghost exchanges) and linearized node by node; a coarse level's projected
-// Gauss-Seidel on a given set of rows. The rows are those of the serial kernels: a distributed sweep
+// of one colour, between two ghost exchanges) and linearized node by node; the gathered coarsest
+// level's projected Gauss-Seidel. The rows are those of the serial kernels: a distributed sweep
 // does at each row what the serial sweep does there.
 #include <algorithm>
 #include "bindings/common.hpp"
@@ -185,9 +185,10 @@ struct LocalContactLevel {
   }
 };
 
-// A coarse level's rows on one rank (owned rows complete, ghost rows empty): block and projected
-// Gauss-Seidel on given rows, with the inverted diagonal blocks of level_smoothers.hpp. `scale` (the
-// largest diagonal entry of the whole level, the same on every rank) sets the inert-dof threshold.
+// The gathered coarsest level (the same on every rank): the projected Gauss-Seidel passes of the
+// serial coarsest solve where the exact solution leaves the bounds, with the inverted diagonal blocks
+// of level_smoothers.hpp. `scale` (the largest diagonal entry of the level) sets the inert-dof
+// threshold.
 template <int d>
 struct LocalLevelSmoother {
   BlockMatrix<d> A;
@@ -195,30 +196,6 @@ struct LocalLevelSmoother {
   std::vector<std::uint8_t> inert;
 
   LocalLevelSmoother(const BlockMatrix<d>& M, double scale) : A(M) { invert_diagonal<d>(A, Dinv, inert, scale); }
-
-  void sweep(py::array_t<double>& x, const DArr& b, const IArr& rows, bool forward, double omega, py::object lo, py::object hi,
-             py::object bounded) {
-    const Index n = A.rows;
-    if (!(omega > 0 && omega < 2)) throw InputError("omega must lie in (0, 2)");
-    double* xx = writable(x, "x", n * d);
-    require_shape(b, "b", {(py::ssize_t)n, d});
-    const SweepOrder order = rows.size() == n && rows.data()[0] == 0 && rows.data()[n - 1] == n - 1 && std::is_sorted(rows.data(), rows.data() + n)
-                                 ? SweepOrder()
-                                 : SweepOrder(row_list(rows, n));
-    if (lo.is_none()) {
-      py::gil_scoped_release free;
-      block_gs_sweep<d>(A, Dinv, b.data(), xx, forward, order, omega);
-      return;
-    }
-    const DArr l = lo.cast<DArr>(), h = hi.cast<DArr>();
-    const BArr bd = bounded.cast<BArr>();
-    require_shape(l, "lo", {(py::ssize_t)n, d});
-    require_shape(h, "hi", {(py::ssize_t)n, d});
-    require_shape(bd, "bounded", {(py::ssize_t)n});
-    const std::vector<std::uint8_t> bv(bd.data(), bd.data() + n);
-    py::gil_scoped_release free;
-    projected_gs_sweep<d>(A, Dinv, bv, inert, l.data(), h.data(), b.data(), xx, forward, order, omega);
-  }
 
   // Projected passes over every row, forward and backward in turn, until one moves no entry by more
   // than tol max|x| or after max_sweeps; returns the passes made. A row is bounded where a bound of
@@ -284,12 +261,8 @@ void bind_local(py::module_& m) {
       .def_property_readonly("load", [](const L& l) { return to_numpy(l.P.load(), {(py::ssize_t)l.n(), d}); })
       .def_property_readonly("base_mask", [](const L& l) { return to_numpy(l.P.base_mask(), {(py::ssize_t)l.n(), d}); });
   using S = LocalLevelSmoother<d>;
-  py::class_<S>(m, ("LocalLevelSmoother" + sfx).c_str(), "A coarse level's Gauss-Seidel on one rank's rows")
+  py::class_<S>(m, ("LocalLevelSmoother" + sfx).c_str(), "The gathered coarsest level's projected Gauss-Seidel")
       .def(py::init([](const BM& A, double scale) { return new S(A, scale); }), py::arg("A"), py::arg("scale"))
-      .def("sweep", &S::sweep, py::arg("x"), py::arg("b"), py::arg("rows"), py::arg("forward"), py::arg("omega") = 1.0,
-           py::arg("lo") = py::none(),
-           py::arg("hi") = py::none(), py::arg("bounded") = py::none(),
-           "one block (or, with bounds, projected) Gauss-Seidel pass over rows, x (n, d) in place")
       .def("projected_sweeps", &S::projected_sweeps, py::arg("x"), py::arg("b"), py::arg("lo"), py::arg("hi"), py::arg("omega"),
            py::arg("max_sweeps"), py::arg("tol"),
            "projected passes over every row, forward and backward in turn, until one moves no entry by more than "

@@ -305,6 +305,7 @@ class PendingUpdate:
         self.request, self.buffers, self.rows, self.recv_all = request, buffers, rows, recv_all
 
     def finish(self) -> None:
+        """Wait for the exchange and write the ghost rows (once; later calls do nothing)."""
         if self.request is None:
             return
         self.request.Wait()
