@@ -223,13 +223,14 @@ def solve_cases(comm, folder: str) -> None:
 
 def run_commands(comm, folder: str) -> None:
     """Part "cli": the commands on the ranks (JSON and VTU into FOLDER), rank 0 printing each exit
-    status: Coulomb hertz, frictionless sphere, and an option not distributed yet."""
+    status: Coulomb hertz, frictionless sphere, an option and a command not distributed yet."""
     from contactmg.cli.main import main as cli_main
     runs = {"hertz": ["hertz", "--levels", "4", "--friction", "0.4", "--json", f"{folder}/hertz.json",
                       "--vtu", f"{folder}/hertz.vtu", "-q"],
             "sphere": ["sphere", "--levels", "2", "--cell", "tetra", "--friction", "0", "--json",
                        f"{folder}/sphere.json", "-q"],
-            "adaptive": ["hertz", "--levels", "3", "--hierarchy", "adaptive", "-q"]}
+            "adaptive": ["hertz", "--levels", "3", "--hierarchy", "adaptive", "-q"],
+            "cork": ["cork", "--levels", "1", "-q"]}
     for name, argv in runs.items():
         status = cli_main(argv)
         rank0_print(f"EXIT {name} {status}", comm=comm)

@@ -92,6 +92,11 @@ def test_commands_on_two_ranks_report_the_serial_keys():
     assert "EXIT adaptive 2" in lines, r.stdout
     errors = [ln for ln in r.stderr.splitlines() if ln.startswith("contactmg hertz: error:")]
     assert errors == ["contactmg hertz: error: --hierarchy adaptive is not distributed yet: run on one rank"], r.stderr
+    # a command not distributed yet: the same, rather than every rank solving it alone
+    assert "EXIT cork 2" in lines, r.stdout
+    errors = [ln for ln in r.stderr.splitlines() if ln.startswith("contactmg cork:")]
+    assert errors == ["contactmg cork: error: cork is not distributed yet (on several ranks only hertz and sphere run): "
+                      "run it on one rank, without mpirun"], r.stderr
     for name, argv in (("hertz", ["hertz", "--levels", "4", "--friction", "0.4"]),
                        ("sphere", ["sphere", "--levels", "2", "--cell", "tetra", "--friction", "0"])):
         serial_json = f"{folder}/{name}-serial.json"

@@ -18,6 +18,16 @@ def wanted() -> bool:
     return get_comm().size > 1
 
 
+def refuse(args) -> int:
+    """A command that does not run distributed, started on several ranks: one line from rank 0 and
+    exit status 2 on every rank (each rank would otherwise solve the whole problem alone)."""
+    from ..distributed import get_comm
+    if get_comm().rank == 0:
+        print(f"contactmg {args.command}: error: {args.command} is not distributed yet (on several ranks only hertz "
+              "and sphere run): run it on one rank, without mpirun", file=sys.stderr)
+    return EXIT_BAD_INPUT
+
+
 def _refuse_unsupported(args) -> None:
     if args.method != "nmg":
         raise ValueError(f"--method {args.method} is not distributed yet: the distributed solve is nmg (truncated "

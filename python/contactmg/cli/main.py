@@ -111,10 +111,9 @@ def main(argv: Optional[List[str]] = None) -> int:
     """The command line: parse `argv` and run the command; returns the exit status."""
     parser = _parser()
     args = parser.parse_args(argv)
-    if args.command in ("hertz", "sphere"):
-        from . import distributed
-        if distributed.wanted():
-            return distributed.run(args)
+    from . import distributed
+    if distributed.wanted():
+        return distributed.run(args) if args.command in ("hertz", "sphere") else distributed.refuse(args)
     try:
         if args.command == "hertz":
             return run_hertz(args)
