@@ -163,6 +163,9 @@ def check_mpi_scaling(res):
     # the serial solver's cycles within one (another colour order)
     assert all(abs(r["threads_cycles"] - r["cycles"]) <= 1 for r in strong)
     assert all(0 < r["bytes_per_owned_dof"] < 5000 for r in rows)
+    # one rank exchanges nothing; two ranks exchange after the colours of their sweeps
+    assert strong[0]["exchanges_per_cycle"] == 0 and strong[1]["exchanges_per_cycle"] > 0
+    assert strong[0]["whole_levels"] == 0
     assert res["bandwidth"]["read_gb_s_1"] > 0
 
 

@@ -95,7 +95,7 @@ def run(args) -> int:
         "coarse_rebuilds": result.rebuilds, "cycle_type": f"{args.cycle}({args.nu1},{args.nu2})", "peak_rss_mb": rss, "threads": 1,
         "ordering": "hashed", "hierarchy": "uniform",
         "ranks": comm.size, "rank_solve_seconds": seconds, "rank_memory_bytes": memory,
-        "phase_seconds": result.phase_seconds,
+        "phase_seconds": result.phase_seconds, "exchanges": result.exchanges, "whole_levels": result.whole_levels,
     }
     if args.command == "hertz":
         from ..examples import hertz as h

@@ -359,6 +359,16 @@ class DistributedMonotoneStep:
             self.notes.append("rotated contact frames: the plain truncated coarse correction (the serial solver "
                               "projects it there)")
 
+    def exchanges(self) -> int:
+        """The halo exchanges this rank has made on the fine and the distributed coarse levels."""
+        halos = [self.halo] + [L.halo for L in self.coarse.levels]
+        return int(sum(h.exchanges for h in halos if h is not None))
+
+    @property
+    def whole_levels(self) -> int:
+        """How many coarse levels every rank holds whole (replicated.py)."""
+        return self.coarse.k
+
     def memory_bytes(self) -> int:
         """The bytes of this rank's matrices, transfers and vectors (arrays only): the fine level (matrix,
         load, Dirichlet and contact data, as the core holds them), what the coarse correction holds, and

@@ -177,6 +177,7 @@ class Halo:
     recv: Dict[int, np.ndarray] = field(default_factory=dict)   # source rank -> local ghost indices
     send: Dict[int, np.ndarray] = field(default_factory=dict)   # destination rank -> local owned indices
     _graph: object = None
+    exchanges: int = 0  # the exchanges made so far (the cost that grows with the ranks: latency)
 
     @classmethod
     def build(cls, comm, gid: np.ndarray, owner: np.ndarray) -> "Halo":
@@ -241,6 +242,7 @@ class Halo:
         sendbuf = np.ascontiguousarray(rows[send_all]).ravel()
         recvbuf = np.empty(len(recv_all) * width)
         MPI = mpi_module()
+        self.exchanges += 1
         send_counts = [len(self.send[r]) * width for r in self.destinations]
         recv_counts = [len(self.recv[r]) * width for r in self.sources]
         request = self._graph.Ineighbor_alltoallv([sendbuf, (send_counts, None), MPI.DOUBLE],
@@ -255,6 +257,7 @@ class Halo:
         return self._lists
 
     def _alltoallv(self, sendbuf: np.ndarray, recvbuf: np.ndarray, width: int) -> None:
+        self.exchanges += 1
         MPI = mpi_module()
         send_counts = [len(self.send[r]) * width for r in self.destinations]
         recv_counts = [len(self.recv[r]) * width for r in self.sources]

@@ -103,6 +103,8 @@ class DistributedResult:
     max_normal_stress: float = 0.0
     central_pressure: float = 0.0
     rebuilds: int = 0
+    exchanges: int = 0     # halo exchanges of the solve on this rank (one per colour of a sweep, ...)
+    whole_levels: int = 0  # coarse levels held whole by every rank
 
     @property
     def level(self):
@@ -199,6 +201,7 @@ class DistributedProblem:
         history: List[dict] = []
         first = -1.0
         status, converged = f"no convergence in {opt.max_cycles} cycles", False
+        exchanges_before = step.exchanges()  # the solve's, not the set-up's
         t1 = time.perf_counter()
         for it in range(1, opt.max_cycles + 1):
             cn = step.iterate(u)
@@ -228,6 +231,8 @@ class DistributedProblem:
         out = DistributedResult(u_canonical, converged, status, len(history), history, seconds, build,
                                 dict(step.phase_seconds), comm.size, step.memory_bytes(), self.hierarchy, step.notes)
         out.rebuilds = step.rebuilds
+        out.exchanges = step.exchanges() - exchanges_before
+        out.whole_levels = step.whole_levels
         self._contact_zone(u, out)
         return out
 
