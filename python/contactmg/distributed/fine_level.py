@@ -14,7 +14,7 @@ from typing import Optional, Sequence
 import numpy as np
 
 from .. import _core
-from ..mesh.mesh import Mesh
+from ..mesh.mesh import FACET_NODES, Mesh
 from ..model.friction import Coulomb, Frictionless, Tresca
 from ..model.loads import assemble_load
 from ..model.material import Material
@@ -23,9 +23,15 @@ from ..model.problem import ContactBoundary, Dirichlet, Problem, dirichlet_array
 
 def local_mesh(level, cell_type: str) -> Mesh:
     """The local cells of a LocalLevel as a Mesh (its facets: the physical boundary facets of the
-    local cells with their tags)."""
-    return Mesh(np.ascontiguousarray(level.points), np.ascontiguousarray(level.cells), cell_type,
-                np.ascontiguousarray(level.facets), np.ascontiguousarray(level.facet_tags))
+    local cells with their tags). Trusted, as the serial hierarchy trusts its refined levels: the
+    cells and facets are the core's refinement of the validated coarse mesh (or its own cells), a
+    subset of the serial level's; the Python validation took 2.0 of the 2.1 s of the fine level's
+    set-up on the Hertz half disk at level 7."""
+    facets = np.asarray(level.facets, np.int64)
+    if not facets.size:  # a rank whose cells reach no boundary
+        facets = np.zeros((0, FACET_NODES[cell_type]), np.int64)
+    return Mesh._trusted(np.ascontiguousarray(level.points, float), np.ascontiguousarray(level.cells, np.int64), cell_type,
+                         np.ascontiguousarray(facets), np.ascontiguousarray(level.facet_tags, np.int64))
 
 
 def _owners_values(level, values: np.ndarray) -> np.ndarray:
