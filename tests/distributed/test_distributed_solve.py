@@ -145,3 +145,21 @@ def test_whole_levels_threshold_is_checked():
     for bad in (-1, 2.5, True):
         with pytest.raises(DistributedError, match="whole_below must be an integer >= 0 or None"):
             problem.solve(OPTIONS, whole_below=bad)
+
+
+def test_an_empty_contact_boundary_is_refused_with_the_serial_message():
+    from contactmg.distributed import DistributedError, DistributedHierarchy, DistributedProblem
+    from contactmg.examples import hertz as _hertz
+    from contactmg.mesh.generators import HERTZ_ARC, HERTZ_TOP, hertz_half_disk
+    from contactmg.model.material import Material
+    from contactmg.model.obstacle import PlaneObstacle
+    from contactmg.model.problem import Dirichlet
+    h = DistributedHierarchy.build(hertz_half_disk("triangle"), 2, SerialComm())
+    plane = PlaneObstacle((0.0, 0.0), (0.0, -1.0))
+    # the contact tags are the Dirichlet tags: every contact node is fixed
+    with pytest.raises(DistributedError, match="the contact boundary is empty: every node of the facets tagged"):
+        DistributedProblem(h, Material(_hertz.E, _hertz.NU), [Dirichlet([HERTZ_TOP, HERTZ_ARC], (0.0, -0.1))],
+                           contact_tags=[HERTZ_ARC], obstacle=plane)
+    with pytest.raises(DistributedError, match="no boundary facet carries the contact tags"):
+        DistributedProblem(h, Material(_hertz.E, _hertz.NU), [Dirichlet([HERTZ_TOP], (0.0, -0.1))],
+                           contact_tags=[987], obstacle=plane)

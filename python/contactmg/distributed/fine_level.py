@@ -50,13 +50,8 @@ def _contact_boundary(mesh: Mesh, fixed, fixed_values, tags, obstacle) -> Contac
         return ContactBoundary(np.zeros(0, np.int64), np.zeros((0, d)), np.zeros(0), np.zeros(0),
                                facets=np.zeros((0, mesh.facets.shape[1]), np.int64))
     view = SimpleNamespace(mesh=mesh, fixed=fixed, fixed_values=fixed_values)
-    try:
-        return Problem._contact_boundary(view, tags, obstacle)
-    except ValueError as e:
-        if "the contact boundary is empty" in str(e):  # every local contact node is fixed: none here
-            return ContactBoundary(np.zeros(0, np.int64), np.zeros((0, d)), np.zeros(0), np.zeros(0),
-                                   facets=np.zeros((0, mesh.facets.shape[1]), np.int64))
-        raise
+    # every local contact node fixed: none here (whether the whole boundary is empty, the ranks decide together)
+    return Problem._contact_boundary(view, tags, obstacle, allow_empty=True)
 
 
 def _local_dirichlet(mesh: Mesh, dirichlet: Sequence[Dirichlet]):
@@ -87,6 +82,9 @@ class LocalFine:
         self.fixed = both[:, :d] > 0.5
         self.fixed_values = np.ascontiguousarray(both[:, d:])
         contact = _contact_boundary(mesh, self.fixed, self.fixed_values, contact_tags, obstacle)
+        # whether a local facet carries the contact tags (with no contact node on any rank: a tag no
+        # rank has, or a boundary that Dirichlet data fixes everywhere)
+        self.found_contact = bool(len(contact_tags)) and bool(np.any(np.isin(mesh.facet_tags, list(contact_tags))))
         # (a bound given per node names global node ids)
         coef = friction.coefficients(level.gid[contact.nodes], contact.measure) if len(contact.nodes) else np.zeros(0)
         # per node: is it a contact node, gap, normal, coefficient -- the owner's

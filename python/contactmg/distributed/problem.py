@@ -161,15 +161,20 @@ class DistributedProblem:
                                   friction, body_force, traction, pressure, gravity)
         found = self.fine.found_dirichlet.astype(int)
         contacts = len(self.fine.owned_contacts)
+        contact_facets = int(self.fine.found_contact)
         if not is_serial(comm):
             found = np.max(comm.allgather(np.atleast_1d(found)), axis=0)
             contacts = comm.allreduce(contacts, op=op(comm, "SUM"))
+            contact_facets = comm.allreduce(contact_facets, op=op(comm, "MAX"))
         with raise_together(comm):
             for bc, f in zip(dirichlet, np.atleast_1d(found)):
                 if not f:
                     raise ValueError(f"no boundary facet carries the Dirichlet tags {list(bc.tags)}")
-            if len(contact_tags) and contacts == 0:
+            if len(contact_tags) and contacts == 0 and not contact_facets:
                 raise ValueError(f"no boundary facet carries the contact tags {list(contact_tags)}")
+            if len(contact_tags) and contacts == 0:
+                raise ValueError(f"the contact boundary is empty: every node of the facets tagged {list(contact_tags)} is "
+                                 "fixed by Dirichlet data (are the contact tags the Dirichlet tags?)")
         self.num_contact = int(contacts)
         self.assembly_seconds = time.perf_counter() - t0
 

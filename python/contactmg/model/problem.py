@@ -454,7 +454,11 @@ class Problem:
                             frames=contact_frames(normals, self.fixed[nodes[order]]))
         return c, source[keep]
 
-    def _contact_boundary(self, tags, obstacle, contact: Optional[ObstacleContact] = None) -> ContactBoundary:
+    def _contact_boundary(self, tags, obstacle, contact: Optional[ObstacleContact] = None,
+                          allow_empty: bool = False) -> ContactBoundary:
+        """The contact nodes of the facets tagged `tags`: gaps, normals, boundary measure, frames.
+        allow_empty: a boundary every node of which is fixed is returned empty rather than refused
+        (one rank's part of a distributed mesh, where the ranks decide together)."""
         mesh, d = self.mesh, self.mesh.dim
         if not len(tags):
             return ContactBoundary(np.zeros(0, np.int64), np.zeros((0, d)), np.zeros(0), np.zeros(0),
@@ -487,6 +491,9 @@ class Problem:
                         np.ascontiguousarray(normals), np.ascontiguousarray(gaps)) < 2
         nodes, gaps, normals = nodes[keep], gaps[keep], normals[keep]
         if len(nodes) == 0:
+            if allow_empty:
+                return ContactBoundary(np.zeros(0, np.int64), np.zeros((0, d)), np.zeros(0), np.zeros(0),
+                                       facets=np.zeros((0, mesh.facets.shape[1]), np.int64))
             raise ValueError(f"the contact boundary is empty: every node of the facets tagged {list(tags)} is fixed by "
                              "Dirichlet data (are the contact tags the Dirichlet tags?)")
         _check_obstacle_placement(mesh, facets, nodes, gaps, normals, tags,
