@@ -47,6 +47,19 @@ CMG_PREFETCH_INLINE void prefetch_block_values(const V* values, const Index* ptr
   for (; b < e; b += 64) __builtin_prefetch(b);
 }
 
+// A row loop over row(0), row(1), ... at step q: x at the columns of the row kPrefetchRows ahead and
+// the values of the row kPrefetchValueRows ahead, where has(q') says that row q' is to be read
+// (the fine and coarse sweeps' range and list loops).
+template <int d, class V, class Row, class Has>
+CMG_PREFETCH_INLINE void prefetch_rows_ahead(const V* values, const ColIndex* cols, const Index* ptr, const double* x, Index q,
+                                             Row&& row, Has&& has) {
+  if (has(q + kPrefetchRows)) {
+    const Index j = row(q + kPrefetchRows);
+    prefetch_block_columns<d>(cols, ptr[j], ptr[j + 1], x);
+  }
+  if (has(q + kPrefetchValueRows)) prefetch_block_values<d>(values, ptr, row(q + kPrefetchValueRows));
+}
+
 // The cache lines of the values of row i + ahead (if there is one)
 template <int d, class V>
 CMG_PREFETCH_INLINE void prefetch_row_values(const V* values, const Index* ptr, Index i, Index ahead, Index n) {

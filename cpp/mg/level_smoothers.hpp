@@ -145,11 +145,7 @@ void gs_rows(const BlockMatrix<d>& A, const V* values, const double* Dinv, const
   const Index* diag = A.diag.data();
   for (Index q = 0; q < count; ++q) {
     const Index i = row(q);
-    if (has(q + kPrefetchRows)) {
-      const Index j = row(q + kPrefetchRows);
-      prefetch_block_columns<d>(cols, ptr[j], ptr[j + 1], x);
-    }
-    if (has(q + kPrefetchValueRows)) prefetch_block_values<d>(values, ptr, row(q + kPrefetchValueRows));
+    prefetch_rows_ahead<d>(values, cols, ptr, x, q, row, has);
     if (bounded && bounded[i]) {
       projected_row_out_of_line<d>(A, values, inert, lo, hi, b, x, i);
       continue;

@@ -77,11 +77,7 @@ struct NonlinearGaussSeidel {
     const std::uint8_t other = L::has_contact ? (CP::kSpecialInverse | CP::kContactRow) : CP::kSpecialInverse;
     for (Index q = 0; q < count; ++q) {
       const Index i = row(q);
-      if (has(q + kPrefetchRows)) {
-        const Index j = row(q + kPrefetchRows);
-        prefetch_block_columns<d>(cols, ptr[j], ptr[j + 1], u);
-      }
-      if (has(q + kPrefetchValueRows)) prefetch_block_values<d>(values, ptr, row(q + kPrefetchValueRows));
+      prefetch_rows_ahead<d>(values, cols, ptr, u, q, row, has);
       if (flags[i] & other) {
         other_row(P, u, i, omega);
         continue;

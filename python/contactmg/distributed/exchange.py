@@ -178,6 +178,7 @@ class Halo:
     send: Dict[int, np.ndarray] = field(default_factory=dict)   # destination rank -> local owned indices
     _graph: object = None
     exchanges: int = 0  # the exchanges made so far (the cost that grows with the ranks: latency)
+    _lists: object = None  # (every send row, every ghost row), formed on the first update
 
     @classmethod
     def build(cls, comm, gid: np.ndarray, owner: np.ndarray) -> "Halo":
@@ -249,9 +250,24 @@ class Halo:
                                                   [recvbuf, (recv_counts, None), MPI.DOUBLE])
         return PendingUpdate(request, (sendbuf, recvbuf), rows, recv_all)
 
+    def update_many(self, *arrays: np.ndarray) -> None:
+        """update() of several arrays of one length (rows = local nodes; any dtype whose values a
+        double holds exactly, such as 0/1 flags) in one exchange."""
+        if self._graph is None:
+            return
+        widths = [int(np.prod(a.shape[1:], dtype=np.int64)) for a in arrays]
+        send_all, recv_all = self._all()
+        sendbuf = np.hstack([a[send_all].reshape(len(send_all), w).astype(float) for a, w in zip(arrays, widths)]).ravel()
+        recvbuf = np.empty(len(recv_all) * sum(widths))
+        self._alltoallv(sendbuf, recvbuf, sum(widths))
+        got, at = recvbuf.reshape(len(recv_all), sum(widths)), 0
+        for a, w in zip(arrays, widths):
+            a[recv_all] = got[:, at:at + w].reshape((-1,) + a.shape[1:])
+            at += w
+
     def _all(self):
         """Every destination's send rows and every source's ghost rows, each in rank order."""
-        if getattr(self, "_lists", None) is None:
+        if self._lists is None:
             cat = lambda parts: np.concatenate(parts).astype(np.int64) if parts else np.zeros(0, np.int64)  # noqa: E731
             self._lists = (cat([self.send[r] for r in self.destinations]), cat([self.recv[r] for r in self.sources]))
         return self._lists
@@ -263,36 +279,6 @@ class Halo:
         recv_counts = [len(self.recv[r]) * width for r in self.sources]
         self._graph.Neighbor_alltoallv([sendbuf, (send_counts, None), MPI.DOUBLE],
                                        [recvbuf, (recv_counts, None), MPI.DOUBLE])
-
-    def update_many(self, *arrays: np.ndarray) -> None:
-        """update() of several arrays of one length (rows = local nodes; any dtype whose values a
-        double holds exactly, such as 0/1 flags) in one exchange."""
-        if self._graph is None:
-            return
-        widths = [int(np.prod(a.shape[1:], dtype=np.int64)) for a in arrays]
-
-        def pick(idx):
-            return np.hstack([a[idx].reshape(len(idx), w).astype(float) for a, w in zip(arrays, widths)])
-
-        for r, block in zip(self.sources, self._exchange(pick, sum(widths))):
-            at = 0
-            for a, w in zip(arrays, widths):
-                a[self.recv[r]] = block[:, at:at + w].reshape((-1,) + a.shape[1:])
-                at += w
-
-    def _exchange(self, pick, width: int) -> List[np.ndarray]:
-        """Sends pick(rows) ((k, width) floats) of the rows each destination holds as ghosts; returns
-        the blocks received from each source, in the order of self.sources."""
-        recv_counts = [len(self.recv[r]) * width for r in self.sources]
-        sendbuf = np.concatenate([np.ascontiguousarray(pick(self.send[r]), float).ravel() for r in self.destinations]) \
-            if self.destinations else np.zeros(0)
-        recvbuf = np.empty(sum(recv_counts))
-        self._alltoallv(sendbuf, recvbuf, width)
-        blocks, start = [], 0
-        for c in recv_counts:
-            blocks.append(recvbuf[start:start + c].reshape(-1, width))
-            start += c
-        return blocks
 
     def free(self) -> None:
         """Release the neighbourhood communicator."""
