@@ -27,10 +27,6 @@ class ExactAccumulator {
   // A product's top bit lies below 2^2048 (bit 4300 of T); the spare chunks above take the growth
   // of a sum of up to 2^63 terms and the sign.
   static constexpr int kChunks = 140;
-  // Between carry propagations a chunk receives at most two contributions below 2^53 per term:
-  // 2 * 256 * 2^53 = 2^62 plus a normalised digit stays below 2^63.
-  static constexpr int kTermsPerNormalise = 256;
-
   ExactAccumulator() { chunks_.fill(0); }
 
   // Adds m * 2^bit units of 2^kExpMin: |m| < 2^53 signed, bit >= 0 the position of m's lowest bit in T.
@@ -101,91 +97,123 @@ inline bool split(double x, std::int64_t& m, int& e) {
                    " at index " + std::to_string(i) + "): an exact sum needs finite values");
 }
 
-// Calls add(acc, i) for i in [0, n), propagating the carries every kTermsPerNormalise terms.
-template <class Add>
-ExactAccumulator accumulate(std::int64_t n, Add&& add) {
-  ExactAccumulator acc;
-  for (std::int64_t start = 0; start < n; start += ExactAccumulator::kTermsPerNormalise) {
-    const std::int64_t end = std::min<std::int64_t>(n, start + ExactAccumulator::kTermsPerNormalise);
-    for (std::int64_t i = start; i < end; ++i) add(acc, i);
-    acc.normalise();
+}  // namespace exact_detail
+
+// Terms m * 2^bit (units of 2^kExpMin, |m| < 2^53) collected in one int64 bin per bit position by
+// plain additions, and added into the accumulator after every kTermsPerFlush terms (a bin then
+// holds less than 2^53 * 2^9 = 2^62). Adding each term into the accumulator directly (its carries
+// and chunk bounds) took about three times as long as a bin addition.
+class ExactBins {
+ public:
+  static constexpr int kBias = -ExactAccumulator::kExpMin;
+  // one past the highest bit of a term: the high part (bit + 53) of the largest product of two doubles
+  static constexpr int kBits = 2 * 2046 - 2 * 1075 + kBias + 53 + 1;
+  static constexpr int kTermsPerFlush = 512;
+
+  ExactBins() : bins_(kBits, 0) {}
+
+  inline void add(std::int64_t m, int bit) {
+    bins_[bit] += m;
+    first_ = std::min(first_, bit);
+    last_ = std::max(last_, bit);
+    if (++terms_ == kTermsPerFlush) flush();
   }
-  return acc;
+
+  // the bins into the accumulator (each as two parts below 2^31, so that every chunk of the
+  // accumulator takes additions of at most 2^32 until the normalisation)
+  void flush() {
+    for (int b = first_; b <= last_; ++b) {
+      const std::int64_t v = bins_[b];
+      if (!v) continue;
+      acc_.add_mantissa(v & ((std::int64_t(1) << 31) - 1), b);
+      acc_.add_mantissa(v >> 31, b + 31);
+      bins_[b] = 0;
+    }
+    acc_.normalise();
+    first_ = kBits, last_ = -1, terms_ = 0;
+  }
+
+  ExactAccumulator& sum() {
+    flush();
+    return acc_;
+  }
+
+ private:
+  std::vector<std::int64_t> bins_;
+  int first_ = kBits, last_ = -1, terms_ = 0;  // the bins touched since the last flush, the terms added
+  ExactAccumulator acc_;
+};
+
+namespace exact_detail {
+
+// x as bins' term: false for infinities and NaN
+inline bool add_double(ExactBins& bins, double x) {
+  std::int64_t m;
+  int e;
+  const bool finite = split(x, m, e);
+  bins.add(m, e + ExactBins::kBias);
+  return finite;
 }
 
 }  // namespace exact_detail
 
 // sum(x[0..n)) exactly. what: the array's name in the error of a non-finite entry.
 inline ExactAccumulator exact_sum(const double* x, std::int64_t n, const char* what = "the array") {
-  using namespace exact_detail;
-  constexpr int kBias = -ExactAccumulator::kExpMin;
-  return accumulate(n, [=](ExactAccumulator& acc, std::int64_t i) {
-    std::int64_t m;
-    int e;
-    if (!split(x[i], m, e)) non_finite(what, x[i], i);
-    acc.add_mantissa(m, e + kBias);
-  });
+  ExactBins bins;
+  for (std::int64_t i = 0; i < n; ++i)
+    if (!exact_detail::add_double(bins, x[i])) exact_detail::non_finite(what, x[i], i);
+  return bins.sum();
 }
 
 // sum(x[i] * y[i]) exactly, over the entries i whose row i / width is flagged in `rows` (nullptr:
 // every entry). The product of the two 53-bit mantissas is formed exactly in 128 bits and split into
 // its low and high 53 bits, so no case (subnormal, underflowing or overflowing product) needs a path
-// of its own. The parts go into one int64 bin per bit position of T (the low and the high parts in
-// bins of their own), plain additions: a bin takes at most kTermsPerFlush parts below 2^53 (below
-// 2^62 in all), then the bins touched since the last flush are added into the accumulator. That
-// kept the per-term work to two additions (the parts added into the accumulator directly took
-// about three times as long).
+// of its own; the parts go into the bins.
 inline ExactAccumulator exact_dot(const double* x, const double* y, std::int64_t n, const char* what_x = "the first array",
                                   const char* what_y = "the second array", const std::uint8_t* rows = nullptr,
                                   std::int64_t width = 1) {
   using namespace exact_detail;
-  constexpr int kBias = -ExactAccumulator::kExpMin;
+  constexpr int kBias = ExactBins::kBias;
   constexpr std::uint64_t kLow53 = (std::uint64_t(1) << 53) - 1, kFrac = (std::uint64_t(1) << 52) - 1;
-  constexpr std::int64_t kTermsPerFlush = 512;
-  constexpr int kBits = 2 * 2046 - 2 * 1075 + kBias + 1;  // one past the largest bit of a low part
-  std::vector<std::int64_t> low(kBits, 0), high(kBits, 0);  // the high part of bin b lies at bit b + 53
-  int first = kBits, last = -1;                            // the bins touched since the last flush
-  ExactAccumulator acc;
-  const auto flush = [&]() {
-    for (int b = first; b <= last; ++b) {
-      for (std::int64_t* bin : {&low[b], &high[b]}) {
-        const std::int64_t v = *bin;
-        if (!v) continue;
-        const int at = b + (bin == &high[b] ? 53 : 0);
-        // |v| < 2^62: as two parts below 2^32, so that every chunk of the accumulator takes
-        // additions of at most 2^32 until the normalisation below
-        acc.add_mantissa(v & ((std::int64_t(1) << 31) - 1), at);
-        acc.add_mantissa(v >> 31, at + 31);
-        *bin = 0;
-      }
-    }
-    acc.normalise();
-    first = kBits, last = -1;
-  };
-  for (std::int64_t start = 0; start < n; start += kTermsPerFlush) {
-    const std::int64_t end = std::min(n, start + kTermsPerFlush);
-    for (std::int64_t i = start; i < end; ++i) {
-      if (rows && !rows[i / width]) continue;
-      std::uint64_t bx, by;
-      std::memcpy(&bx, x + i, sizeof bx);
-      std::memcpy(&by, y + i, sizeof by);
-      const unsigned biased_x = unsigned(bx >> 52) & 0x7ff, biased_y = unsigned(by >> 52) & 0x7ff;
-      if (biased_x == 0x7ff) non_finite(what_x, x[i], i);
-      if (biased_y == 0x7ff) non_finite(what_y, y[i], i);
-      const std::uint64_t mx = (bx & kFrac) | (std::uint64_t(biased_x != 0) << 52);
-      const std::uint64_t my = (by & kFrac) | (std::uint64_t(biased_y != 0) << 52);
-      const unsigned __int128 p = (unsigned __int128)mx * my;
-      // all ones for a negative product: v ^ sign - sign is -v then
-      const std::int64_t sign = std::int64_t((bx ^ by)) >> 63;
-      const int bit = int(biased_x + (biased_x == 0)) + int(biased_y + (biased_y == 0)) - 2 * 1075 + kBias;
-      low[bit] += (std::int64_t((std::uint64_t)p & kLow53) ^ sign) - sign;
-      high[bit] += (std::int64_t((std::uint64_t)(p >> 53)) ^ sign) - sign;
-      first = std::min(first, bit);
-      last = std::max(last, bit);
-    }
-    flush();
+  ExactBins bins;
+  for (std::int64_t i = 0; i < n; ++i) {
+    if (rows && !rows[i / width]) continue;
+    std::uint64_t bx, by;
+    std::memcpy(&bx, x + i, sizeof bx);
+    std::memcpy(&by, y + i, sizeof by);
+    const unsigned biased_x = unsigned(bx >> 52) & 0x7ff, biased_y = unsigned(by >> 52) & 0x7ff;
+    if (biased_x == 0x7ff) non_finite(what_x, x[i], i);
+    if (biased_y == 0x7ff) non_finite(what_y, y[i], i);
+    const std::uint64_t mx = (bx & kFrac) | (std::uint64_t(biased_x != 0) << 52);
+    const std::uint64_t my = (by & kFrac) | (std::uint64_t(biased_y != 0) << 52);
+    const unsigned __int128 p = (unsigned __int128)mx * my;
+    // all ones for a negative product: v ^ sign - sign is -v then
+    const std::int64_t sign = std::int64_t((bx ^ by)) >> 63;
+    const int bit = int(biased_x + (biased_x == 0)) + int(biased_y + (biased_y == 0)) - 2 * 1075 + kBias;
+    bins.add((std::int64_t((std::uint64_t)p & kLow53) ^ sign) - sign, bit);
+    bins.add((std::int64_t((std::uint64_t)(p >> 53)) ^ sign) - sign, bit + 53);
   }
-  return acc;
+  return bins.sum();
+}
+
+// The node products of a nodal dot: fl(x_i . y_i), the `width` products of node i summed left to
+// right in double (the order numpy's (x * y).sum(axis=1) takes), for every node i flagged in `rows`
+// (nullptr: every node); then those node values summed exactly. A node is owned by one rank, which
+// forms its value with the same operations on any partition, so the sum is the same on every rank
+// count; it reads a node once rather than splitting each of its products exactly.
+inline ExactAccumulator exact_node_dot(const double* x, const double* y, std::int64_t nodes, int width, const std::uint8_t* rows = nullptr) {
+  ExactBins bins;
+  for (std::int64_t i = 0; i < nodes; ++i) {
+    if (rows && !rows[i]) continue;
+    const double* a = x + i * width;
+    const double* b = y + i * width;
+    double s = a[0] * b[0];
+    for (int c = 1; c < width; ++c) s += a[c] * b[c];
+    if (!exact_detail::add_double(bins, s))
+      throw InputError("the product at node " + std::to_string(i) + " is not finite (" + (std::isnan(s) ? "nan" : "inf") +
+                       "): an exact sum needs finite values");
+  }
+  return bins.sum();
 }
 
 }  // namespace cmg

@@ -1,6 +1,5 @@
 // The local halves of the distributed exact sums: this rank's terms summed exactly, as the Python
 // integer T with sum = T * 2^kExpMin that contactmg.distributed.exchange combines over the ranks.
-#include "base/exact_sum.hpp"
 #include "bindings/common.hpp"
 
 namespace cmg::bindings {
@@ -13,12 +12,6 @@ std::string shape_of(const DArr& a) {
   return s + (a.ndim() == 1 ? ",)" : ")");
 }
 
-py::int_ to_int(ExactAccumulator& acc) {
-  const std::vector<unsigned char> b = acc.to_bytes();
-  const py::object from_bytes = py::reinterpret_borrow<py::object>((PyObject*)&PyLong_Type).attr("from_bytes");
-  return from_bytes(py::bytes(reinterpret_cast<const char*>(b.data()), b.size()), "little", py::arg("signed") = true);
-}
-
 }  // namespace
 
 void bind_distributed(py::module_& m) {
@@ -28,7 +21,7 @@ void bind_distributed(py::module_& m) {
              py::gil_scoped_release release;
              acc = exact_sum(x.data(), (std::int64_t)x.size(), "the array");
            }
-           return to_int(acc);
+           return exact_int(acc);
          }, py::arg("x"),
          "The sum of all entries of x (any shape) exactly, as the integer T with sum = T * 2^-2252 (the "
          "local_fixed_point_sum of contactmg.distributed.exchange). ValueError for a non-finite entry.");
@@ -49,11 +42,30 @@ void bind_distributed(py::module_& m) {
              acc = exact_dot(x.data(), y.data(), (std::int64_t)x.size(), "the first array", "the second array",
                              rows.is_none() ? nullptr : flags.data(), width);
            }
-           return to_int(acc);
+           return exact_int(acc);
          }, py::arg("x"), py::arg("y"), py::arg("rows") = py::none(),
          "sum(x * y) over all entries (x and y of one shape; with rows, a flag per row of x: the flagged rows' "
          "entries only) exactly, each product exact, as the integer T with sum = T * 2^-2252 (the "
          "local_fixed_point_dot of contactmg.distributed.exchange). ValueError for a non-finite entry or different shapes.");
+  m.def("exact_node_dot_limbs", [](DArr x, DArr y, py::object rows) {
+           if (x.ndim() != 2 || y.ndim() != 2 || x.shape(0) != y.shape(0) || x.shape(1) != y.shape(1) || x.shape(1) < 1)
+             throw InputError("a nodal dot needs two arrays of one shape (nodes, components), got " + shape_of(x) + " and " + shape_of(y));
+           BArr flags;
+           if (!rows.is_none()) {
+             flags = rows.cast<BArr>();
+             if (flags.ndim() != 1 || flags.size() != x.shape(0))
+               throw InputError("rows needs one flag per node, got " + std::to_string(flags.size()) + " for shape " + shape_of(x));
+           }
+           ExactAccumulator acc;
+           {
+             py::gil_scoped_release release;
+             acc = exact_node_dot(x.data(), y.data(), (std::int64_t)x.shape(0), (int)x.shape(1), rows.is_none() ? nullptr : flags.data());
+           }
+           return exact_int(acc);
+         }, py::arg("x"), py::arg("y"), py::arg("rows") = py::none(),
+         "sum over the nodes (rows of x and y, with rows: the flagged ones) of the node's products x_i . y_i summed "
+         "left to right in double, the node values summed exactly: the integer T with sum = T * 2^-2252 "
+         "(local_node_dot of contactmg.distributed.exchange). ValueError for a non-finite node value or different shapes.");
 }
 
 }  // namespace cmg::bindings

@@ -99,14 +99,52 @@ struct LocalContactLevel {
     return y;
   }
 
-  // f - A u on `rows` (zero elsewhere)
+  // f - A u on `rows` (zero elsewhere), with the row passes' prefetches
   py::array_t<double> residual(const DArr& u, const IArr& rows) const {
     require_shape(u, "u", {(py::ssize_t)n(), d});
+    check_rows(rows, n());
     py::array_t<double> r({(py::ssize_t)n(), (py::ssize_t)d});
-    std::fill(r.mutable_data(), r.mutable_data() + n() * d, 0.0);
+    double* out = r.mutable_data();
     const BlockMatrix<d>& A = P.matrix();
-    for (Index i : row_list(rows, n())) A.residual_row(A.values.data(), u.data(), P.load().data(), i, 0, r.mutable_data() + d * i);
+    const Index* list = rows.data();
+    const Index count = (Index)rows.size();
+    py::gil_scoped_release free;
+    std::fill(out, out + n() * d, 0.0);
+    for (Index q = 0; q < count; ++q) A.residual_row(A.values.data(), u.data(), P.load().data(), list[q], kPrefetchValueRows, out + d * list[q]);
     return r;
+  }
+
+  // y = A (u - old) on the rows flagged in `rows`: written into `out` there (add: added to it), and
+  // the exact sum of the node values (u - old)_i . y_i (exact_node_dot's: the products of a node
+  // summed left to right): |u - old|_A^2 over these rows from one pass over the matrix, beside the
+  // kept A u it updates (the serial step's fused norm pass).
+  py::int_ difference_product(const DArr& u, const DArr& old, py::array_t<double>& out, const BArr& rows, bool add) const {
+    require_shape(u, "u", {(py::ssize_t)n(), d});
+    require_shape(old, "old", {(py::ssize_t)n(), d});
+    require_shape(rows, "rows", {(py::ssize_t)n()});
+    double* y = writable(out, "out", n() * d);
+    const BlockMatrix<d>& A = P.matrix();
+    const double *x = u.data(), *z = old.data(), *vals = A.values.data();
+    const std::uint8_t* flag = rows.data();
+    ExactAccumulator acc;
+    {
+      py::gil_scoped_release free;
+      ExactBins bins;
+      for (Index i = 0; i < A.rows; ++i) {
+        if (!flag[i]) continue;
+        A.prefetch_ahead(i, x, z);
+        prefetch_row_values<d>(vals, A.indptr.data(), i, kPrefetchValueRows, A.rows);
+        double w[d] = {};
+        accumulate_block_differences<d>(vals, A.indices.data(), A.indptr[i], A.indptr[i + 1], x, z, w);
+        double s = (x[d * i] - z[d * i]) * w[0];
+        for (int a = 1; a < d; ++a) s += (x[d * i + a] - z[d * i + a]) * w[a];
+        for (int a = 0; a < d; ++a) y[d * i + a] = add ? y[d * i + a] + w[a] : w[a];
+        if (!exact_detail::add_double(bins, s))
+          throw InputError("|u - old|_A^2 has a non-finite term at row " + std::to_string(i) + ": the iterate is no longer finite");
+      }
+      acc = bins.sum();
+    }
+    return exact_int(acc);
   }
 
   // The law's linearization at the contact nodes listed in `contacts` (indices into the contact list):
@@ -135,18 +173,25 @@ struct LocalContactLevel {
                           to_numpy(H, {(py::ssize_t)nc, d, d}), bounded);
   }
 
-  // per contact node in `contacts`: state (0 free, 1 stick, 2 slip) and friction energy
-  py::tuple contact_state(const DArr& u, const DArr& r, const IArr& contacts) const {
+  // per contact node in `contacts`: state (0 free, 1 stick, 2 slip) and, given A u, the friction
+  // energy (its residual f - A u at the node; zero without)
+  py::tuple contact_state(const DArr& u, const IArr& contacts, py::object Au) const {
     require_shape(u, "u", {(py::ssize_t)n(), d});
-    require_shape(r, "r", {(py::ssize_t)n(), d});
+    DArr Av;
+    if (!Au.is_none()) {
+      Av = Au.cast<DArr>();
+      require_shape(Av, "Au", {(py::ssize_t)n(), d});
+    }
     const std::vector<Index> cs = row_list(contacts, P.num_contact());
     std::vector<std::int8_t> state(cs.size(), 0);
     std::vector<double> energy(cs.size(), 0.0);
     for (std::size_t m = 0; m < cs.size(); ++m) {
       const Index c = cs[m], k = P.contact_node(c) * d;
       state[m] = (std::int8_t)node_state<d>(P.node(c), u.data() + k);
+      if (Au.is_none()) continue;
+      const double r = P.load()[k] - Av.data()[k];
       energy[m] = with_law(law, [&](auto L) -> double {
-        if constexpr (decltype(L)::has_contact) return friction_energy<decltype(L), d>(P.node(c), u.data() + k, r.data()[k]);
+        if constexpr (decltype(L)::has_contact) return friction_energy<decltype(L), d>(P.node(c), u.data() + k, r);
         else return 0.0;
       });
     }
@@ -247,7 +292,12 @@ void bind_local(py::module_& m) {
                              "bytes of the level's matrix, load, Dirichlet and contact data")
       .def("linearize", &L::linearize, py::arg("u"), py::arg("r"), py::arg("contacts"),
            "(mask, lo, hi, hessian, bounded) at the given contact nodes; the friction gradient is added into r")
-      .def("contact_state", &L::contact_state, py::arg("u"), py::arg("r"), py::arg("contacts"))
+      .def("contact_state", &L::contact_state, py::arg("u"), py::arg("contacts"), py::arg("Au") = py::none(),
+           "(state, friction energy) at the given contact nodes; the energy needs A u")
+      .def("difference_product", &L::difference_product, py::arg("u"), py::arg("old"), py::arg("out"), py::arg("rows"),
+           py::arg("add") = false,
+           "A (u - old) on the flagged rows into out (add: added), and the exact local sum of the node values "
+           "(u - old)_i . (A (u - old))_i as the integer T with sum = T * 2^-2252")
       .def("admit_mixed", &L::admit_mixed, py::arg("y"), py::arg("u"), py::arg("contacts"),
            "the Anderson step's mixed iterate y at the given contact nodes, adjusted to the state of u in place; "
            "per node whether it admits y")

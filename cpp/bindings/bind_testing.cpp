@@ -184,7 +184,7 @@ void bind_testing(py::module_& m) {
     require_shape(M, "M", {(py::ssize_t)m, (py::ssize_t)m}); require_shape(x0, "x0", {(py::ssize_t)n});
     ThreadScope team(threads);
     std::vector<double> x(x0.data(), x0.data() + n), gx(n);
-    SettledAnderson A;
+    SettledAnderson<> A;
     py::array_t<double> out({(py::ssize_t)steps, (py::ssize_t)n});
     py::array_t<std::uint8_t> mixed(steps);
     int calls = 0;
@@ -195,7 +195,7 @@ void bind_testing(py::module_& m) {
         for (Index j = 0; j < m; ++j) v += M.data()[r * m + j] * x[b + j];
         gx[i] = v;
       }
-      mixed.mutable_at(s) = A.step(x, gx, [&](std::vector<double>&, const std::vector<double>&) {
+      mixed.mutable_at(s) = A.step(x.data(), gx.data(), n, [&](double*, const double*) {
         return refuse_every <= 0 || ++calls % refuse_every != 0;
       });
       x = gx;

@@ -8,6 +8,7 @@
 #include <pybind11/stl.h>
 #include <string>
 #include <vector>
+#include "base/exact_sum.hpp"
 #include "mg/line_smoother.hpp"
 #include "solver/solve_result.hpp"
 
@@ -43,6 +44,14 @@ inline py::array_t<double> moved_to_numpy(std::vector<double>&& v, std::vector<p
   auto* owned = new std::vector<double>(std::move(v));
   py::capsule free_it(owned, [](void* p) { delete static_cast<std::vector<double>*>(p); });
   return py::array_t<double>(shape, owned->data(), free_it);
+}
+
+// An exact local sum as the Python integer T with sum = T * 2^kExpMin (contactmg.distributed.exchange
+// combines the ranks' integers and rounds once).
+inline py::int_ exact_int(ExactAccumulator& acc) {
+  const std::vector<unsigned char> b = acc.to_bytes();
+  const py::object from_bytes = py::reinterpret_borrow<py::object>((PyObject*)&PyLong_Type).attr("from_bytes");
+  return from_bytes(py::bytes(reinterpret_cast<const char*>(b.data()), b.size()), "little", py::arg("signed") = true);
 }
 
 // The lines of a line smoother as a list of node-id arrays, each in chain order.
@@ -103,6 +112,7 @@ void bind_solver(py::module_& m);
 void bind_local_levels(py::module_& m);
 void bind_testing(py::module_& m);
 void bind_distributed(py::module_& m);
+void bind_anderson(py::module_& m);
 void bind_distributed_levels(py::module_& m);
 
 }  // namespace cmg::bindings

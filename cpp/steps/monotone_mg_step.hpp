@@ -53,7 +53,7 @@ struct BuiltLinearization {
 
 struct CycleWorkspace {
   std::vector<double> r, old;
-  SettledAnderson anderson;
+  SettledAnderson<> anderson;
   std::size_t memory_bytes() const { return sizeof(double) * (r.capacity() + old.capacity()) + anderson.memory_bytes(); }
 };
 
@@ -162,7 +162,7 @@ class MonotoneMultigridStep {
         if (state_changed) e_change = change_norm_squared(old_, u, r_.data());
         const bool restart = state_changed && std::sqrt(std::max(e_change, 0.0)) < best_step_;
         const bool mixed =
-            anderson_.step(old_, u, [&](std::vector<double>& y, const std::vector<double>& plain) { return admit_mixed(y, plain); }, restart);
+            anderson_.step(old_.data(), u.data(), (Index)u.size(), [&](double* y, const double* plain) { return admit_mixed(y, plain); }, restart);
         if (state_changed && !mixed) {
           parallel_for((Index)u.size(), [&](Index k) { it_.Au[k] += r_[k]; });
           measured = std::sqrt(std::max(e_change, 0.0));
@@ -333,10 +333,10 @@ class MonotoneMultigridStep {
   // The mixed iterate y of the Anderson step takes the contact state of the plain cycle's result
   // u exactly (on the gap exactly g, sticking tangentials at their exact value), or is refused:
   // an inactive node it puts onto or past the obstacle, a sliding node it stops or turns.
-  bool admit_mixed(std::vector<double>& y, const std::vector<double>& u) const {
+  bool admit_mixed(double* y, const double* u) const {
     for (Index c = 0; c < P_.num_contact(); ++c) {
       const Index k = P_.contact_node(c) * d;
-      if (!admit_mixed_node<d>(P_.node(c), y.data() + k, u.data() + k)) return false;
+      if (!admit_mixed_node<d>(P_.node(c), y + k, u + k)) return false;
     }
     return true;
   }
@@ -358,7 +358,7 @@ class MonotoneMultigridStep {
   std::vector<double>& old_;
   std::vector<double> lo_, hi_;  // nc * d
   std::vector<std::pair<Index, Mat<d>>> hessian_;
-  SettledAnderson& anderson_;
+  SettledAnderson<>& anderson_;
   PetrovGalerkinCoupling<d> pg_;  // declared after H_: clears its overlay of H_ first
   UpwindContactSweep<d, L> upwind_;
   std::vector<std::pair<Index, Vec<d>>> coupling_;  // sliding node -> w (bound_coupling), when wanted

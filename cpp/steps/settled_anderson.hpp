@@ -22,14 +22,29 @@
 #pragma once
 #include <Eigen/Dense>
 #include <algorithm>
+#include <array>
 #include <deque>
 #include <vector>
 #include "base/parallel.hpp"
 
 namespace cmg {
 
+// The serial step's sums: over fixed chunks on all threads (parallel_sums), the same bits on any
+// thread count. A distributed solve sums node values exactly over its ranks instead
+// (bindings/bind_anderson.cpp).
+struct ChunkSums {
+  template <int M, class F>
+  std::array<double, M> sums(Index n, int m, F&& f) const { return parallel_sums<M>(n, m, f); }
+};
+
+// Sums: how the step's dot products are summed (sums<M>(n, m, f): f(k, s) adds entry k's terms of
+// the m sums to s[0..m)); every entry k is visited once, as the step also writes its slots there.
+template <class Sums = ChunkSums>
 class SettledAnderson {
  public:
+  SettledAnderson() = default;
+  explicit SettledAnderson(Sums sums) : sums_(std::move(sums)) {}
+
   static constexpr int kDepth = 3;  // cycles mixed (a fixed internal choice; 2-5 behave alike)
 
   void reset() {
@@ -43,6 +58,7 @@ class SettledAnderson {
     return s;
   }
   bool last_accelerated() const { return accelerated_; }
+  const Sums& sums() const { return sums_; }
   // Every slot sized for n entries now, their pages touched here and not in the cycles where the
   // history first fills (a kept workspace's first solve: a first touch costs up to ~50 us
   // a page on this project's VM). Every entry is written before it is read: no bit changes.
@@ -65,13 +81,13 @@ class SettledAnderson {
   // vector reads and writes a step against some 40 in the textbook layout). Every value is the one of the textbook layout bit
   // for bit: g' = G(x') - x' is formed again from the same operands, and the sums run over the same
   // chunks in the same order (parallel_sums).
+  // x and gx hold n entries; admit(double* candidate, const double* plain).
   template <class Admit>
-  bool step(const std::vector<double>& x, std::vector<double>& gx, Admit&& admit, bool restart = false) {
+  bool step(const double* x, double* gx, Index n, Admit&& admit, bool restart = false) {
     if (restart) {  // this cycle's pair spans two states: the history starts with the next one
       reset();
       return false;
     }
-    const Index n = (Index)x.size();
     double gnorm;
     if (last_ >= 0) {
       Slot& q = slot_[last_];
@@ -79,7 +95,7 @@ class SettledAnderson {
       const double* dg_old[kDepth] = {};
       for (int i = 0; i < h; ++i) dg_old[i] = slot_[hist_[i]].g.data();
       // sums: 0 |g|^2; 1..h+1 dg_i . g (oldest first, the new pair last); h+2..2h+2 dg_new . dg_j
-      const auto s = parallel_sums<2 * kDepth + 2>(n, 2 * h + 3, [&](Index k, double* acc) {
+      const auto s = sums_.template sums<2 * kDepth + 2>(n, 2 * h + 3, [&](Index k, double* acc) {
         const double g = gx[k] - x[k], g_last = q.g[k] - q.x[k];
         const double dx = x[k] - q.x[k], dg = g - g_last;
         q.x[k] = dx;
@@ -93,7 +109,7 @@ class SettledAnderson {
       gnorm = s[0];
       if (accelerated_ && !(gnorm < last_gnorm_)) {  // the mixed step did not help: start over
         reset();
-        keep_last(x, gx, nullptr);
+        keep_last(x, gx, n, nullptr);
       } else {
         const int nw = last_;
         for (int j = 0; j < h; ++j) gram_[nw][hist_[j]] = gram_[hist_[j]][nw] = s[2 + h + j];
@@ -104,12 +120,12 @@ class SettledAnderson {
       }
     } else {
       gnorm = 0;
-      keep_last(x, gx, &gnorm);
+      keep_last(x, gx, n, &gnorm);
     }
     last_gnorm_ = gnorm;
     accelerated_ = false;
     if (last_ >= 0) return false;  // no history, or it was just restarted: x, G(x) kept
-    if (gnorm == 0) { keep_last(x, gx, nullptr); return false; }
+    if (gnorm == 0) { keep_last(x, gx, n, nullptr); return false; }
     // gamma = argmin |g - dG gamma| (normal equations of a <= kDepth column least-squares problem,
     // solved by a rank-revealing decomposition: nearly dependent columns get no weight)
     const int m = (int)hist_.size();
@@ -120,7 +136,7 @@ class SettledAnderson {
       for (int j = 0; j < m; ++j) M(i, j) = gram_[hist_[i]][hist_[j]];
     }
     const Eigen::VectorXd gamma = M.completeOrthogonalDecomposition().solve(rhs);
-    if (!gamma.allFinite()) { keep_last(x, gx, nullptr); return false; }
+    if (!gamma.allFinite()) { keep_last(x, gx, n, nullptr); return false; }
     // the candidate gx - sum_i gamma_i (dx_i + dg_i) in place; G(x) and x into the next last slot
     // (the oldest pair's when the history is full: read before written, entry by entry)
     const double* dx[kDepth] = {};
@@ -136,8 +152,8 @@ class SettledAnderson {
       gx[k] -= s;
     });
     last_ = to;
-    if (!admit(gx, static_cast<const std::vector<double>&>(q.g))) {
-      gx = q.g;
+    if (!admit(gx, static_cast<const double*>(q.g.data()))) {
+      std::copy(q.g.begin(), q.g.end(), gx);
       return false;
     }
     accelerated_ = true;
@@ -167,23 +183,23 @@ class SettledAnderson {
   }
 
   // x and G(x) kept as the last iterate (and |G(x) - x|^2 into *gnorm when asked)
-  void keep_last(const std::vector<double>& x, const std::vector<double>& gx, double* gnorm) {
-    const Index n = (Index)x.size();
+  void keep_last(const double* x, const double* gx, Index n, double* gnorm) {
     const int to = next_last_slot(n);
     Slot& q = slot_[to];
     if (gnorm) {
-      *gnorm = parallel_sum(n, [&](Index k) {
+      *gnorm = sums_.template sums<1>(n, 1, [&](Index k, double* acc) {
         q.x[k] = x[k];
         q.g[k] = gx[k];
         const double g = gx[k] - x[k];
-        return g * g;
-      });
+        acc[0] += g * g;
+      })[0];
     } else {
       parallel_for(n, [&](Index k) { q.x[k] = x[k]; q.g[k] = gx[k]; });
     }
     last_ = to;
   }
 
+  Sums sums_;
   std::vector<Slot> slot_;     // at most kDepth
   std::deque<int> hist_;       // slots holding pairs (dx, dg), oldest first
   int last_ = -1;              // slot holding (x', G(x')), or -1

@@ -1,6 +1,7 @@
 """The compiled long accumulator of the exact sums against the numpy reference and exact rational
 arithmetic: the same integer T (sum = T * 2^_E_MIN) on data spanning the whole double range, the
-correctly rounded result, independence of the order, and the errors of bad input."""
+correctly rounded result, independence of the order, the node dots of the cycle, and the errors of
+bad input."""
 import math
 from fractions import Fraction
 
@@ -10,7 +11,7 @@ import pytest
 from contactmg import _core
 from contactmg.distributed import exact_dot, exact_sum
 from contactmg.distributed.exchange import (_E_MIN, _numpy_fixed_point_dot, _numpy_fixed_point_sum,
-                                            local_fixed_point_dot, local_fixed_point_sum)
+                                            local_fixed_point_dot, local_fixed_point_sum, local_node_dot, node_dots)
 
 TINY = 5e-324                      # the smallest subnormal
 BIG = np.finfo(float).max
@@ -129,3 +130,33 @@ def test_a_dot_over_flagged_rows_is_the_dot_of_those_rows():
     assert exact_dot(x, y, rows=rows) == exact_dot(x[keep], y[keep])
     with pytest.raises(ValueError, match="one flag per row"):
         local_fixed_point_dot(x, y, rows[:-1])
+
+
+@pytest.mark.parametrize("width", [1, 2, 3])
+def test_a_node_dot_sums_the_node_values_exactly(width):
+    """node_dots: each flagged node's products summed left to right in double (numpy's
+    (x * y).sum(axis=1)), those values summed exactly (math.fsum), whatever the split into ranks."""
+    rng = np.random.default_rng(20 + width)
+    n = 2000
+    x, y = wide(rng, n * width, -60, 60).reshape(n, width), wide(rng, n * width, -60, 60).reshape(n, width)
+    rows = (rng.random(n) < 0.6).astype(np.uint8)
+    values = (x * y).sum(axis=1)[rows.astype(bool)]
+    assert exact(local_node_dot(x, y, rows)) == sum(Fraction(v) for v in values)
+    assert node_dots([(x, y)], rows=rows)[0] == math.fsum(values)
+    # the flagged nodes in two parts (as on two ranks): the same integer
+    part = np.zeros(n, np.uint8)
+    part[: n // 3] = 1
+    assert local_node_dot(x, y, rows & part) + local_node_dot(x, y, rows & (1 - part)) == local_node_dot(x, y, rows)
+    # an integer combination of node dots is rounded once: x.y - 2 y.x = -x.y
+    assert node_dots([[(1, x, y), (-2, y, x)]], rows=rows)[0] == -math.fsum(values)
+
+
+def test_a_node_dot_refuses_bad_input():
+    with pytest.raises(ValueError, match=r"product at node 1 is not finite \(nan\)"):
+        local_node_dot(np.array([[1.0, 2.0], [np.nan, 0.0]]), np.ones((2, 2)))
+    with pytest.raises(ValueError, match=r"product at node 0 is not finite \(inf\)"):
+        local_node_dot(np.array([[1e300, 0.0]]), np.array([[1e300, 1.0]]))
+    with pytest.raises(ValueError, match=r"one shape \(nodes, components\)"):
+        _core.exact_node_dot_limbs(np.ones((2, 3)), np.ones((3, 2)))
+    with pytest.raises(ValueError, match="one flag per node"):
+        local_node_dot(np.ones((4, 2)), np.ones((4, 2)), np.ones(3, np.uint8))

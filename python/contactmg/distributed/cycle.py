@@ -12,7 +12,9 @@ where a row reads a neighbour's new value.
 - The kernels of a coarse level (Galerkin rows, residual, restriction, prolongation, bounds) are the
   core's (cpp/mg/distributed_galerkin.hpp); this module orders them and the exchanges.
 - The coarsest level gathered and solved on every rank.
-- Norms and energies by exact sums.
+- Norms and energies by exact sums: each owned node's value (its products summed in a fixed order)
+  summed exactly over the ranks (exchange.node_dots). A u is kept and updated in the pass that
+  measures the step, as the serial step does.
 
 So every value is the same on every number of ranks: the iterates, cycle counts and norms are
 bitwise those of one rank."""
@@ -25,10 +27,9 @@ import numpy as np
 import scipy.sparse as sp
 
 from .. import _core
-from .anderson import DistributedAnderson
 from .colouring import colour_level
 from .comm import is_serial, op
-from .exchange import exact_dot, exact_dots, exact_sum
+from .exchange import exact_sum, exact_totals, node_dots
 from .operators import (GatheredCoarsest, galerkin_rows, local_transfer, rotate_rows, rows_to_csr,
                         transfer_kernel)
 from .replicated import Whole, replicated_count
@@ -347,13 +348,24 @@ class DistributedMonotoneStep:
         P = local_transfer(lev, hierarchy.levels[-2], d, comm)
         P = rotate_rows(P, fine.contact_nodes, fine.frames, d)
         self.coarse = CoarseCorrection(comm, hierarchy, d, P, opt.threads, opt.whole_below)
-        self.built = None  # (mask, hessian) the coarse levels were built for
+        # the coarse levels built at set-up for the Dirichlet truncation alone, as the serial solver
+        # builds them: the first cycle's linearization updates only the rows it changes (the same
+        # bits as a full build)
+        no_contact = np.zeros(0, np.int64)
+        mask = fine.core.linearize(np.zeros((self.n, d)), np.zeros((self.n, d)), no_contact)[0].ravel()
+        hess_nodes, hess = no_contact, np.zeros((0, d, d))
+        self.coarse.build(fine, mask, hess_nodes, hess)
+        self.built = (mask, hess_nodes, hess)  # the truncation and Hessian blocks the coarse levels were built for
+        self.Au: Optional[np.ndarray] = None  # A u on the owned rows, updated with u in every cycle
+        self._z = np.zeros((self.n, d))  # A (u - old) where a step is measured without updating A u
         self.phase_seconds = {k: 0.0 for k in ("pre_smooth", "linearize", "coarse_update", "coarse_correction",
                                                "post_smooth", "norm")}
         self.notes = []
-        self.rebuilds = 0  # coarse hierarchies built (the first included)
+        self.rebuilds = 1  # coarse hierarchies built (the set-up's included)
         # Coulomb: the frozen bound leaves a slow linear contraction once the state settles
-        self.anderson = DistributedAnderson(comm, self.owned, d) if fine.law == "coulomb" else None
+        # the serial step's Anderson mixing with its dot products as node sums over the ranks (bind_anderson.cpp)
+        self.anderson = _core.NodeAnderson(self.owned_u8, d, lambda totals: exact_totals(totals, comm)) \
+            if fine.law == "coulomb" else None
         self.best_step = INF  # the smallest ||u^{k+1} - u^k||_A of the solve
         if fine.frames.size and not np.all(np.isin(np.round(np.abs(fine.frames), 15), (0.0, 1.0))):
             self.notes.append("rotated contact frames: the plain truncated coarse correction (the serial solver "
@@ -410,19 +422,17 @@ class DistributedMonotoneStep:
         hess_nodes = fine.contact_nodes[fine.owned_contacts][keep]
         return mask, lo, hi, hess_nodes, hess[keep], _any(self.comm, bounded), r
 
-    def multiply(self, v: np.ndarray) -> np.ndarray:
-        """A v (flat) on every local row, the owned rows complete: the core's product."""
-        return self.fine.core.multiply(v.reshape(-1, self.d), self.opt.threads).ravel()
-
-    def energy_norm(self, v: np.ndarray) -> float:
-        """||v||_A over the owned rows (exact sums), v flat over the local dofs (ghosts fresh)."""
-        v = v.reshape(-1, self.d)
-        Av = self.fine.core.multiply(v, self.opt.threads)
-        return float(np.sqrt(max(exact_dot(v, Av, self.comm, self.owned_u8), 0.0)))
+    def difference_norm(self, u: np.ndarray, old: np.ndarray, update: bool = False) -> float:
+        """||u - old||_A over the owned rows (exact sums), u and old (n, d) with fresh ghosts, from one
+        pass over the matrix; update: A u += A (u - old) in the same pass (else A (u - old) is left in
+        self._z)."""
+        out = self.Au if update else self._z
+        total = self.fine.core.difference_product(u, old, out, self.owned_u8, update)
+        return float(np.sqrt(max(exact_totals([total], self.comm)[0], 0.0)))
 
     def any_sliding(self, u: np.ndarray) -> bool:
         """Whether a contact node slides on any rank."""
-        state, _ = self.fine.core.contact_state(u, np.zeros_like(u), self.fine.owned_contacts)
+        state, _ = self.fine.core.contact_state(u, self.fine.owned_contacts)
         return _any(self.comm, bool(np.any(state == 2)))
 
     def admit_mixed(self, y: np.ndarray, plain: np.ndarray) -> bool:
@@ -441,10 +451,15 @@ class DistributedMonotoneStep:
         if not self.any_sliding(u):
             self.anderson.reset()
             return -1.0
-        change = self.energy_norm((u - old).ravel()) if state_changed else 0.0
+        # the restart test's step, A (u - old) kept: where the mixed iterate is refused, u is G(x) bit
+        # for bit and A u takes it instead of a second pass over the matrix
+        change = self.difference_norm(u, old) if state_changed else 0.0
         restart = state_changed and change < self.best_step
-        mixed = self.anderson.step(old.ravel(), u.ravel(), self.admit_mixed, restart)
-        return change if state_changed and not mixed else -1.0
+        mixed = self.anderson.step(old, u, self.admit_mixed, restart)
+        if state_changed and not mixed:
+            self.Au += self._z
+            return change
+        return -1.0
 
     def iterate(self, u: np.ndarray) -> float:
         """One cycle on u (n, d, in place); returns ||u_new - u_old||_A."""
@@ -458,6 +473,8 @@ class DistributedMonotoneStep:
             t = now
 
         old = u.copy()
+        if self.Au is None:
+            self.Au = self.fine.core.multiply(u, opt.threads)
         for _ in range(opt.nu1):
             self.sweep(u, True, opt.omega)
         lap("pre_smooth")
@@ -481,18 +498,17 @@ class DistributedMonotoneStep:
             self.sweep(u, False, opt.omega_post)
         lap("post_smooth")
         measured = self.mix(old, u, state_changed) if self.anderson is not None else -1.0
-        step = measured if measured >= 0 else self.energy_norm((u - old).ravel())
+        step = measured if measured >= 0 else self.difference_norm(u, old, update=True)
         self.best_step = min(self.best_step, step)
         lap("norm")
         return step
 
     def record(self, u: np.ndarray) -> dict:
         """Energy (without the constant of the Dirichlet values), ||u||_A and the contact counts."""
-        Au = self.fine.core.multiply(u, self.opt.threads)
-        r = self.f - Au
-        state, fe = self.fine.core.contact_state(u, r, self.fine.owned_contacts)
-        # 1/2 u.Au - f.u over the owned dofs: each product exact, 2 e rounded once (halving is exact)
-        quad, twice = exact_dots([(u, Au), [(1, u, Au), (-2, self.f, u)]], self.comm, self.owned_u8)
+        Au = self.Au
+        state, fe = self.fine.core.contact_state(u, self.fine.owned_contacts, Au)
+        # 1/2 u.Au - f.u over the owned nodes: 2 e rounded once (halving is exact)
+        quad, twice = node_dots([(u, Au), [(1, u, Au), (-2, self.f, u)]], self.comm, self.owned_u8)
         e = 0.5 * twice + exact_sum(fe, self.comm)
         counts = np.array([np.count_nonzero(state > 0), np.count_nonzero(state == 1), np.count_nonzero(state == 2)])
         if not is_serial(self.comm):
@@ -505,4 +521,4 @@ class DistributedMonotoneStep:
         """||S(u) - u||_A for one forward nonlinear sweep S (u unchanged)."""
         v = u.copy()
         self.sweep(v, True, self.opt.omega)
-        return self.energy_norm((v - u).ravel())
+        return self.difference_norm(v, u)

@@ -5,8 +5,9 @@ A floating-point sum rounds after every addition, so its value depends on the or
 per-rank partial sums changes with the partition. exact_sum and exact_dot instead add every term
 exactly, as integers (each double is m * 2^e with an integer m of at most 53 bits), combine the
 ranks' integers exactly and round once at the end: the correctly rounded sum, the same on every
-rank count and equal to math.fsum of all the terms in one place. The local sums run in the compiled
-core (cpp/base/exact_sum.hpp); the numpy versions here are the tests' reference."""
+rank count and equal to math.fsum of all the terms in one place. The cycle's sums (node_dots) add
+one value a node exactly: its products summed in a fixed order by its owner. The local sums run in
+the compiled core (cpp/base/exact_sum.hpp); the numpy versions here are the tests' reference."""
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -80,6 +81,15 @@ def local_fixed_point_dot(x, y, rows=None) -> int:
     return _core.exact_dot_limbs(x, y, np.ascontiguousarray(rows, np.uint8))
 
 
+def local_node_dot(x, y, rows=None) -> int:
+    """The node values fl(x_i . y_i) of (nodes, d) arrays (rows: a flag per node, the nodes counted;
+    None: all) summed exactly: the integer T with sum = T * 2^_E_MIN (node_dots says why)."""
+    x = np.ascontiguousarray(x, dtype=float)
+    y = np.ascontiguousarray(y, dtype=float)
+    return _core.exact_node_dot_limbs(x.reshape(len(x), -1), y.reshape(len(y), -1),
+                                      None if rows is None else np.ascontiguousarray(rows, np.uint8))
+
+
 def _numpy_fixed_point_sum(x) -> int:
     """local_fixed_point_sum in numpy: the reference the core's integer is tested against."""
     x = np.ascontiguousarray(x, dtype=float).ravel()
@@ -127,21 +137,42 @@ def exact_dot(x, y, comm=None, rows=None) -> float:
 def exact_dots(pairs, comm=None, rows=None) -> List[float]:
     """exact_dot of every pair (x, y), or of every sum of pairs [(k, x, y), ...] with integer
     coefficients k, with one collective for all."""
+    return _dots(pairs, comm, lambda x, y: local_fixed_point_dot(x, y, rows))
+
+
+def node_dots(pairs, comm=None, rows=None) -> List[float]:
+    """The nodal dots of the cycle, with one collective for all: for each pair (x, y) of (nodes, d)
+    arrays (or each sum of pairs [(k, x, y), ...], integer k), the node values fl(x_i . y_i) (the d
+    products of node i summed left to right, as numpy's (x * y).sum(axis=1)) of the nodes flagged in
+    `rows` (the owned ones), summed exactly over all ranks and rounded once. A node has one owner,
+    which forms its value by the same operations on any partition: the same result on every rank
+    count, as exact_dot's, at a third of its cost (one term a node, not two a product)."""
+    return _dots(pairs, comm, lambda x, y: local_node_dot(x, y, rows))
+
+
+def exact_totals(totals, comm=None) -> List[float]:
+    """Local exact integers (T, with sum = T * 2^_E_MIN: the core's *_limbs kernels) summed over the
+    ranks and rounded once each, with one collective for all."""
     comm = get_comm(comm)
+    totals = list(totals)
+    if not is_serial(comm):
+        totals = [sum(t) for t in zip(*comm.allgather(totals))]
+    return [_round(t) for t in totals]
+
+
+def _dots(pairs, comm, local_dot) -> List[float]:
     totals, known = [], {}  # a pair of arrays met twice is summed once
 
     def local(x, y):
         key = (id(x), id(y))
         if key not in known:
-            known[key] = local_fixed_point_dot(x, y, rows)
+            known[key] = local_dot(x, y)
         return known[key]
 
     for p in pairs:
         terms = p if isinstance(p, list) else [(1, p[0], p[1])]
         totals.append(sum(int(k) * local(x, y) for k, x, y in terms))
-    if not is_serial(comm):
-        totals = [sum(t) for t in zip(*comm.allgather(totals))]
-    return [_round(t) for t in totals]
+    return exact_totals(totals, comm)
 
 
 def exact_norm(x, comm=None) -> float:

@@ -252,7 +252,7 @@ class DistributedProblem:
         force_frame = -r                                                   # A u - f: the obstacle's force
         force = np.einsum("cab,cb->ca", fine.frames[mine], force_frame)   # global components
         out.reaction = np.array([exact_sum(force[:, a], comm) for a in range(d)])
-        state, _ = fine.core.contact_state(u, np.zeros_like(u), mine.astype(np.int64))
+        state, _ = fine.core.contact_state(u, mine.astype(np.int64))
         # distance from the x = 0 line (2D) or the z axis (3D): the examples' symmetry axes
         pts = fine.level.points[nodes]
         x = pts[:, 0] if d == 2 else np.hypot(pts[:, 0], pts[:, 1])
