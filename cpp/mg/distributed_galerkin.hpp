@@ -26,6 +26,7 @@ struct CoarseRows {
   std::vector<double> Dinv;
   std::vector<std::uint8_t> inert;
   std::vector<std::uint8_t> changed;  // per row: its values changed in the last Galerkin pass
+  double inverted_scale = -1;         // the scale of the inverses held (-1: none)
 
   Index n() const { return A.rows; }
 
@@ -39,8 +40,16 @@ struct CoarseRows {
   }
 
   // The diagonal inverses for a level-wide `scale` (the inert threshold is relative to it, so a
-  // changed scale touches every row: d^3 work a row, small beside a Galerkin pass).
-  void invert(double scale) { invert_diagonal<d>(A, Dinv, inert, scale); }
+  // changed scale touches every row); with the scale of the inverses held, only the rows the last
+  // Galerkin pass changed (a row's inverse reads only its own diagonal block: the same bits).
+  void invert(double scale) {
+    const bool all = scale != inverted_scale || Dinv.size() != (std::size_t)(A.rows * d * d) || changed.size() != (std::size_t)A.rows;
+    if (all) invert_diagonal<d>(A, Dinv, inert, scale);
+    else
+      for (Index i = 0; i < A.rows; ++i)
+        if (changed[i]) invert_diagonal<d>(A, Dinv, inert, scale, i, i + 1);
+    inverted_scale = scale;
+  }
 
   // r_i = b_i - sum_k A_ik x_k on the rows flagged in `owned` (blocks in ascending column), zero elsewhere.
   void residual(const double* x, const double* b, const std::uint8_t* owned, double* r) const {

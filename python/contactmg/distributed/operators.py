@@ -154,7 +154,17 @@ def galerkin_rows(comm, fine_level, coarse_level, T, rows, d: int, A=None, mask=
         T.set_fine(A, np.ascontiguousarray(mask, np.uint8).ravel(), np.asarray(hess_nodes, np.int64),
                    np.ascontiguousarray(hess, float).reshape(-1, d, d))
     _exchange_z_rows(comm, fine_level, coarse_level.gid, T, A)
-    T.form_coarse(A, rows, np.argsort(coarse_level.gid).astype(np.int64))  # in ascending global id: fewer cache misses
+    T.form_coarse(A, rows, _gid_order(coarse_level))  # in ascending global id: fewer cache misses
+
+
+def _gid_order(level) -> np.ndarray:
+    """The local nodes of `level` in ascending global id, kept on the level for the next rebuild
+    (formed again if its ids were renumbered)."""
+    kept = getattr(level, "_gid_order", None)
+    if kept is None or kept[0] is not level.gid:
+        kept = (level.gid, np.argsort(level.gid).astype(np.int64))
+        level._gid_order = kept
+    return kept[1]
 
 
 def rows_to_csr(rows, d: int) -> sp.csr_matrix:
