@@ -211,6 +211,23 @@ void bind_levels(py::module_& m) {
              t.restrict_residual(r.data(), mk, b.mutable_data());
              return b;
            }, py::arg("r"), py::arg("mask") = py::none(), "P^T (M r) on the owned coarse rows, fine rows ascending; zero elsewhere")
+      .def("restrict_fine_residual", [](const T& t, const BlockMatrix<d>& A, const DArr& x, const DArr& b, const DArr& r, const BArr& known,
+                                        py::object mask) {
+             const py::ssize_t n = t.fine_nodes();
+             if (A.rows != (Index)n) throw InputError("A has " + std::to_string(A.rows) + " rows, the transfer " + std::to_string(n) + " fine nodes");
+             require_shape(x, "x", {n, d});
+             require_shape(b, "b", {n, d});
+             require_shape(r, "r", {n, d});
+             require_shape(known, "known", {n});
+             BArr keep;
+             const std::uint8_t* mk = optional_flags(mask, n * d, "mask", keep);
+             py::array_t<double> bc({(py::ssize_t)t.coarse_nodes(), (py::ssize_t)d});
+             double* out = bc.mutable_data();
+             py::gil_scoped_release free;
+             t.restrict_residual(A, x.data(), b.data(), r.data(), known.data(), mk, out);
+             return bc;
+           }, py::arg("A"), py::arg("x"), py::arg("b"), py::arg("r"), py::arg("known"), py::arg("mask") = py::none(),
+           "restrict_residual of the fine residual: r where known, b - A x formed in the same pass elsewhere (the same bits)")
       .def("prolong", [](const T& t, const DArr& xc, py::object mask) {
              require_shape(xc, "xc", {(py::ssize_t)t.coarse_nodes(), d});
              BArr keep;

@@ -320,10 +320,30 @@ class DistributedTransfer {
   // elsewhere); mask per fine dof or nullptr. The fine rows are visited in ascending order and each
   // adds into its coarse rows: every coarse row receives its terms in ascending fine row.
   void restrict_residual(const double* r, const std::uint8_t* mask, double* bc) const {
+    restrict_rows([r](Index i, double* ri) { std::copy(r + d * i, r + d * (i + 1), ri); }, mask, bc);
+  }
+
+  // The same with r_i = b_i - (A x)_i formed in the pass where known[i] is 0 (the rest read from r):
+  // the fine residual restricted as it is formed (the serial restriction's fused pass, 0013), the
+  // same row kernel, so the same bits as restrict_residual of a residual pass.
+  void restrict_residual(const BlockMatrix<d>& A, const double* x, const double* b, const double* r, const std::uint8_t* known,
+                         const std::uint8_t* mask, double* bc) const {
+    const double* vals = A.values.data();
+    restrict_rows([&](Index i, double* ri) {
+      if (known[i]) std::copy(r + d * i, r + d * (i + 1), ri);
+      else A.residual_row(vals, x, b, i, kPrefetchValueRows, ri);
+    }, mask, bc);
+  }
+
+  // the scatter of restrict_residual with fine row i's residual from row(i, ri)
+  template <class Row>
+  void restrict_rows(Row&& row, const std::uint8_t* mask, double* bc) const {
     std::fill(bc, bc + d * cols_, 0.0);
     for (Index i = 0; i < rows_; ++i) {
       double ri[d];
-      for (int c = 0; c < d; ++c) ri[c] = mask && !mask[i * d + c] ? 0.0 : r[i * d + c];
+      row(i, ri);
+      if (mask)
+        for (int c = 0; c < d; ++c) ri[c] = mask[i * d + c] ? ri[c] : 0.0;
       const double* F = full_row(i);
       for (Index k = ptr_[i]; k < ptr_[i + 1]; ++k) {
         const Index I = col_[k];

@@ -47,6 +47,34 @@ def test_difference_product_is_the_product_and_its_node_sum(example, cell):
         fine.core.difference_product(bad, old, out, rows)
 
 
+@pytest.mark.parametrize("example, cell", [(hertz, "triangle"), (sphere, "hexahedron")])
+def test_the_fine_residual_formed_in_the_restriction_is_the_residual_pass(example, cell):
+    """restrict_fine_residual (f - A u formed in the restriction's pass where not known) against
+    restrict_residual of a residual pass: the same bits, with and without the mask."""
+    problem = example(2, cell, Coulomb(0.4), SerialComm())
+    fine = problem.fine
+    n, d = len(fine.level.gid), fine.d
+    rng = np.random.default_rng(8)
+    u = rng.standard_normal((n, d))
+    f = fine.core.load
+    every = np.arange(n, dtype=np.int64)
+    full = fine.core.residual(u, every)
+    known = (rng.random(n) < 0.3).astype(np.uint8)
+    r = np.where(known[:, None] > 0, full, 1e300)  # only the known rows are read
+    from contactmg.distributed.cycle import DistributedMonotoneStep
+    from contactmg.distributed.problem import resolve
+    from contactmg.solve.options import SolverOptions
+    step = DistributedMonotoneStep(problem.comm, fine, problem.hierarchy, resolve(SolverOptions(), problem.hierarchy.cell_type))
+    T = step.coarse.fine_transfer
+    mask = (rng.random(n * d) < 0.8).astype(np.uint8)
+    for m in (None, mask):
+        want = T.restrict_residual(full, m)
+        got = T.restrict_fine_residual(fine.core.matrix, u, f, r, known, m)
+        assert np.array_equal(got, want)
+    with pytest.raises(ValueError, match="known has shape"):
+        T.restrict_fine_residual(fine.core.matrix, u, f, r, known[:-1])
+
+
 def run_node_anderson(M, c, x0, steps, width, flags, refuse_every, combine):
     """The iterates x <- mix(M x + c) of NodeAnderson (the nodes of `flags` summed here)."""
     A = _core.NodeAnderson(flags, width, combine)

@@ -257,13 +257,16 @@ class CoarseCorrection:
         return np.ascontiguousarray(x[self.whole[l].local]) if l < self.k else x
 
     def correction(self, opt, r_fine: np.ndarray, mask: np.ndarray, lo_f: np.ndarray, hi_f: np.ndarray,
-                   bounded: bool) -> np.ndarray:
+                   bounded: bool, formed=None) -> np.ndarray:
         """w = M P c on every local fine row for the fine residual r (ghost rows fresh), the mask and
-        the fine correction bounds (+-inf where none; ghost rows fresh)."""
+        the fine correction bounds (+-inf where none; ghost rows fresh). formed = (A, u, f, known):
+        r holds the rows flagged in `known`, the others are f - A u, formed as they are restricted."""
         top = len(self.levels) - 1
         C, T = self.levels[top], self.fine_transfer
         m = np.ascontiguousarray(mask, np.uint8)
-        C.set_b(self._down(top, T.restrict_residual(r_fine, m)))  # sums in ascending fine node
+        # sums in ascending fine node
+        b = T.restrict_residual(r_fine, m) if formed is None else T.restrict_fine_residual(*formed[:3], r_fine, formed[3], m)
+        C.set_b(self._down(top, b))
         if bounded:
             C.set_bounds(*(self._down(top, v) for v in T.restrict_bounds(lo_f, hi_f, mask=m)))
         else:
@@ -334,11 +337,17 @@ class DistributedMonotoneStep:
         self.n = len(lev.gid)
         self.owned = lev.owner == lev.rank
         self.owned_u8 = self.owned.astype(np.uint8)
-        self.owned_nodes = np.flatnonzero(self.owned).astype(np.int64)
         self._lo, self._hi = np.full((self.n, d), -INF), np.full((self.n, d), INF)  # the fine correction bounds
         self.halo = None if is_serial(comm) else lev.halo  # one rank: no ghosts, nothing to exchange
         self.colours = _colour_rows(comm, lev)
         self.order = np.concatenate(self.colours or [np.zeros(0, np.int64)])
+        # the fine residual is formed at set-up only where it is read before the restriction (the
+        # contact rows, which the linearization reads, and the rows sent to other ranks); the
+        # restriction forms the other owned rows in its own pass (the serial step's fused residual)
+        sent = [np.asarray(v, np.int64) for v in (self.halo.send.values() if self.halo is not None else ())]
+        self.residual_rows = np.unique(np.concatenate([fine.contact_nodes[fine.owned_contacts]] + sent)).astype(np.int64)
+        self.known = (~self.owned).astype(np.uint8)  # ghost rows: their owners'
+        self.known[self.residual_rows] = 1
         if self.halo is not None:  # a node reads a ghost where it shares a cell with one (the matrix pattern)
             reads = np.zeros(self.n, bool)
             cells = lev.cells[(lev.owner[lev.cells] != lev.rank).any(axis=1)]
@@ -405,10 +414,11 @@ class DistributedMonotoneStep:
 
     def linearize(self, u: np.ndarray):
         """mask (n*d), node bounds lo/hi (n, d; +-inf away from the contact nodes), the Hessian
-        blocks, whether any bound is finite, and the fine residual with the friction gradient; ghost
-        rows from their owners."""
+        blocks, whether any bound is finite, and the fine residual with the friction gradient on
+        the rows flagged in self.known (the restriction forms the rest); ghost rows from their
+        owners."""
         fine, d = self.fine, self.d
-        r = fine.core.residual(u, self.owned_nodes)
+        r = fine.core.residual(u, self.residual_rows)  # the rest: in the restriction (correction)
         mask, lo_c, hi_c, H, bounded = fine.core.linearize(u, r, fine.owned_contacts)
         # +-inf away from the contact nodes: the arrays are kept, only the contact rows are written
         lo, hi = self._lo, self._hi
@@ -491,7 +501,7 @@ class DistributedMonotoneStep:
             self.built = key
             self.rebuilds += 1
         lap("coarse_update")
-        w = self.coarse.correction(opt, r, mask, lo, hi, bounded)
+        w = self.coarse.correction(opt, r, mask, lo, hi, bounded, formed=(self.fine.core.matrix, u, self.f, self.known))
         u += w.reshape(-1, self.d)
         lap("coarse_correction")
         for _ in range(opt.nu2):
