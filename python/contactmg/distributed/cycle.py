@@ -366,7 +366,7 @@ class DistributedMonotoneStep:
         self.coarse.build(fine, mask, hess_nodes, hess)
         self.built = (mask, hess_nodes, hess)  # the truncation and Hessian blocks the coarse levels were built for
         self.Au: Optional[np.ndarray] = None  # A u on the owned rows, updated with u in every cycle
-        self._z = np.zeros((self.n, d))  # A (u - old) where a step is measured without updating A u
+        self._z: Optional[np.ndarray] = None  # A (u - old) of the last step measured without updating A u
         self.phase_seconds = {k: 0.0 for k in ("pre_smooth", "linearize", "coarse_update", "coarse_correction",
                                                "post_smooth", "norm")}
         self.notes = []
@@ -392,9 +392,11 @@ class DistributedMonotoneStep:
 
     def memory_bytes(self) -> int:
         """The bytes of this rank's matrices, transfers and vectors (arrays only): the fine level (matrix,
-        load, Dirichlet and contact data, as the core holds them), what the coarse correction holds, and
-        the Anderson history under Coulomb friction."""
-        total = self.fine.core.memory_bytes + self.coarse.memory_bytes()
+        load, Dirichlet and contact data, as the core holds them), the four fine vectors of a cycle
+        (u, A u, the iterate before the cycle and the residual, as the serial core counts them),
+        what the coarse correction holds, and the Anderson history under Coulomb friction."""
+        fine_vectors = 4 * self.n * self.d * 8
+        total = self.fine.core.memory_bytes + fine_vectors + self.coarse.memory_bytes()
         if self.anderson is not None:
             total += self.anderson.memory_bytes()
         return int(total)
@@ -435,8 +437,11 @@ class DistributedMonotoneStep:
     def difference_norm(self, u: np.ndarray, old: np.ndarray, update: bool = False) -> float:
         """||u - old||_A over the owned rows (exact sums), u and old (n, d) with fresh ghosts, from one
         pass over the matrix; update: A u += A (u - old) in the same pass (else A (u - old) is left in
-        self._z)."""
-        out = self.Au if update else self._z
+        self._z until the next such call: not held beyond the cycle)."""
+        if update:
+            out = self.Au
+        else:
+            out = self._z = np.zeros_like(u)
         total = self.fine.core.difference_product(u, old, out, self.owned_u8, update)
         return float(np.sqrt(max(exact_totals([total], self.comm)[0], 0.0)))
 
@@ -466,8 +471,9 @@ class DistributedMonotoneStep:
         change = self.difference_norm(u, old) if state_changed else 0.0
         restart = state_changed and change < self.best_step
         mixed = self.anderson.step(old, u, self.admit_mixed, restart)
+        z, self._z = self._z, None
         if state_changed and not mixed:
-            self.Au += self._z
+            self.Au += z
             return change
         return -1.0
 
@@ -531,4 +537,6 @@ class DistributedMonotoneStep:
         """||S(u) - u||_A for one forward nonlinear sweep S (u unchanged)."""
         v = u.copy()
         self.sweep(v, True, self.opt.omega)
-        return self.difference_norm(v, u)
+        change = self.difference_norm(v, u)
+        self._z = None
+        return change
