@@ -100,14 +100,15 @@ inline bool split(double x, std::int64_t& m, int& e) {
 }  // namespace exact_detail
 
 // Terms m * 2^bit (units of 2^kExpMin, |m| < 2^53) collected in one int64 bin per bit position by
-// plain additions, and added into the accumulator after every kTermsPerFlush terms (a bin then
-// holds less than 2^53 * 2^9 = 2^62). Adding each term into the accumulator directly (its carries
-// and chunk bounds) took about three times as long as a bin addition.
+// plain additions, and added into an accumulator by flush_into after at most kTermsPerFlush terms
+// (a bin then holds less than 2^53 * 2^9 = 2^62). Adding each term into the accumulator directly
+// (its carries and chunk bounds) took about three times as long as a bin addition.
 class ExactBins {
  public:
   static constexpr int kBias = -ExactAccumulator::kExpMin;
-  // one past the highest bit of a term: the high part (bit + 53) of the largest product of two doubles
-  static constexpr int kBits = 2 * 2046 - 2 * 1075 + kBias + 53 + 1;
+  // one past the highest bit of a term: the low part of the largest product of two doubles (its
+  // high part goes into bins of its own, flushed 53 bits up)
+  static constexpr int kBits = 2 * 2046 - 2 * 1075 + kBias + 1;
   static constexpr int kTermsPerFlush = 512;
 
   ExactBins() : bins_(kBits, 0) {}
@@ -116,37 +117,29 @@ class ExactBins {
     bins_[bit] += m;
     first_ = std::min(first_, bit);
     last_ = std::max(last_, bit);
-    if (++terms_ == kTermsPerFlush) flush();
   }
 
-  // the bins into the accumulator (each as two parts below 2^31, so that every chunk of the
-  // accumulator takes additions of at most 2^32 until the normalisation)
-  void flush() {
+  // the bins into acc at `shift` bits up (each as two parts below 2^31, so that every chunk of the
+  // accumulator takes additions of at most 2^32 until the caller normalises it); the bins emptied
+  void flush_into(ExactAccumulator& acc, int shift = 0) {
     for (int b = first_; b <= last_; ++b) {
       const std::int64_t v = bins_[b];
       if (!v) continue;
-      acc_.add_mantissa(v & ((std::int64_t(1) << 31) - 1), b);
-      acc_.add_mantissa(v >> 31, b + 31);
+      acc.add_mantissa(v & ((std::int64_t(1) << 31) - 1), b + shift);
+      acc.add_mantissa(v >> 31, b + shift + 31);
       bins_[b] = 0;
     }
-    acc_.normalise();
-    first_ = kBits, last_ = -1, terms_ = 0;
-  }
-
-  ExactAccumulator& sum() {
-    flush();
-    return acc_;
+    first_ = kBits, last_ = -1;
   }
 
  private:
   std::vector<std::int64_t> bins_;
-  int first_ = kBits, last_ = -1, terms_ = 0;  // the bins touched since the last flush, the terms added
-  ExactAccumulator acc_;
+  int first_ = kBits, last_ = -1;  // the bins touched since the last flush
 };
 
 namespace exact_detail {
 
-// x as bins' term: false for infinities and NaN
+// x as a bins' term: false for infinities and NaN
 inline bool add_double(ExactBins& bins, double x) {
   std::int64_t m;
   int e;
@@ -155,45 +148,66 @@ inline bool add_double(ExactBins& bins, double x) {
   return finite;
 }
 
+// item(i) for i in [0, n), each adding one term to `bins`, flushed into the sum every
+// kTermsPerFlush items; the sum
+template <class Item>
+ExactAccumulator sum_items(ExactBins& bins, std::int64_t n, Item&& item) {
+  ExactAccumulator acc;
+  for (std::int64_t start = 0; start < n; start += ExactBins::kTermsPerFlush) {
+    const std::int64_t end = std::min<std::int64_t>(n, start + ExactBins::kTermsPerFlush);
+    for (std::int64_t i = start; i < end; ++i) item(i);
+    bins.flush_into(acc);
+    acc.normalise();
+  }
+  return acc;
+}
+
 }  // namespace exact_detail
 
 // sum(x[0..n)) exactly. what: the array's name in the error of a non-finite entry.
 inline ExactAccumulator exact_sum(const double* x, std::int64_t n, const char* what = "the array") {
   ExactBins bins;
-  for (std::int64_t i = 0; i < n; ++i)
+  return exact_detail::sum_items(bins, n, [&](std::int64_t i) {
     if (!exact_detail::add_double(bins, x[i])) exact_detail::non_finite(what, x[i], i);
-  return bins.sum();
+  });
 }
 
 // sum(x[i] * y[i]) exactly, over the entries i whose row i / width is flagged in `rows` (nullptr:
 // every entry). The product of the two 53-bit mantissas is formed exactly in 128 bits and split into
 // its low and high 53 bits, so no case (subnormal, underflowing or overflowing product) needs a path
-// of its own; the parts go into the bins.
+// of its own; the low parts and the high parts go into bins of their own.
 inline ExactAccumulator exact_dot(const double* x, const double* y, std::int64_t n, const char* what_x = "the first array",
                                   const char* what_y = "the second array", const std::uint8_t* rows = nullptr,
                                   std::int64_t width = 1) {
   using namespace exact_detail;
   constexpr int kBias = ExactBins::kBias;
   constexpr std::uint64_t kLow53 = (std::uint64_t(1) << 53) - 1, kFrac = (std::uint64_t(1) << 52) - 1;
-  ExactBins bins;
-  for (std::int64_t i = 0; i < n; ++i) {
-    if (rows && !rows[i / width]) continue;
-    std::uint64_t bx, by;
-    std::memcpy(&bx, x + i, sizeof bx);
-    std::memcpy(&by, y + i, sizeof by);
-    const unsigned biased_x = unsigned(bx >> 52) & 0x7ff, biased_y = unsigned(by >> 52) & 0x7ff;
-    if (biased_x == 0x7ff) non_finite(what_x, x[i], i);
-    if (biased_y == 0x7ff) non_finite(what_y, y[i], i);
-    const std::uint64_t mx = (bx & kFrac) | (std::uint64_t(biased_x != 0) << 52);
-    const std::uint64_t my = (by & kFrac) | (std::uint64_t(biased_y != 0) << 52);
-    const unsigned __int128 p = (unsigned __int128)mx * my;
-    // all ones for a negative product: v ^ sign - sign is -v then
-    const std::int64_t sign = std::int64_t((bx ^ by)) >> 63;
-    const int bit = int(biased_x + (biased_x == 0)) + int(biased_y + (biased_y == 0)) - 2 * 1075 + kBias;
-    bins.add((std::int64_t((std::uint64_t)p & kLow53) ^ sign) - sign, bit);
-    bins.add((std::int64_t((std::uint64_t)(p >> 53)) ^ sign) - sign, bit + 53);
+  ExactBins low, high;  // high: bin b holds the parts at bit b + 53
+  ExactAccumulator acc;
+  for (std::int64_t start = 0; start < n; start += ExactBins::kTermsPerFlush) {
+    const std::int64_t end = std::min<std::int64_t>(n, start + ExactBins::kTermsPerFlush);
+    for (std::int64_t i = start; i < end; ++i) {
+      if (rows && !rows[i / width]) continue;
+      std::uint64_t bx, by;
+      std::memcpy(&bx, x + i, sizeof bx);
+      std::memcpy(&by, y + i, sizeof by);
+      const unsigned biased_x = unsigned(bx >> 52) & 0x7ff, biased_y = unsigned(by >> 52) & 0x7ff;
+      if (biased_x == 0x7ff) non_finite(what_x, x[i], i);
+      if (biased_y == 0x7ff) non_finite(what_y, y[i], i);
+      const std::uint64_t mx = (bx & kFrac) | (std::uint64_t(biased_x != 0) << 52);
+      const std::uint64_t my = (by & kFrac) | (std::uint64_t(biased_y != 0) << 52);
+      const unsigned __int128 p = (unsigned __int128)mx * my;
+      // all ones for a negative product: v ^ sign - sign is -v then
+      const std::int64_t sign = std::int64_t((bx ^ by)) >> 63;
+      const int bit = int(biased_x + (biased_x == 0)) + int(biased_y + (biased_y == 0)) - 2 * 1075 + kBias;
+      low.add((std::int64_t((std::uint64_t)p & kLow53) ^ sign) - sign, bit);
+      high.add((std::int64_t((std::uint64_t)(p >> 53)) ^ sign) - sign, bit);
+    }
+    low.flush_into(acc);
+    high.flush_into(acc, 53);
+    acc.normalise();
   }
-  return bins.sum();
+  return acc;
 }
 
 // The node products of a nodal dot: fl(x_i . y_i), the `width` products of node i summed left to
@@ -203,8 +217,8 @@ inline ExactAccumulator exact_dot(const double* x, const double* y, std::int64_t
 // count; it reads a node once rather than splitting each of its products exactly.
 inline ExactAccumulator exact_node_dot(const double* x, const double* y, std::int64_t nodes, int width, const std::uint8_t* rows = nullptr) {
   ExactBins bins;
-  for (std::int64_t i = 0; i < nodes; ++i) {
-    if (rows && !rows[i]) continue;
+  return exact_detail::sum_items(bins, nodes, [&](std::int64_t i) {
+    if (rows && !rows[i]) return;
     const double* a = x + i * width;
     const double* b = y + i * width;
     double s = a[0] * b[0];
@@ -212,8 +226,7 @@ inline ExactAccumulator exact_node_dot(const double* x, const double* y, std::in
     if (!exact_detail::add_double(bins, s))
       throw InputError("the product at node " + std::to_string(i) + " is not finite (" + (std::isnan(s) ? "nan" : "inf") +
                        "): an exact sum needs finite values");
-  }
-  return bins.sum();
+  });
 }
 
 }  // namespace cmg

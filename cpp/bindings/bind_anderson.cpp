@@ -6,6 +6,7 @@
 // ghosts included: the mixed iterate is formed entry by entry from values a ghost shares with its
 // owner and weights every rank shares, so a ghost entry is its owner's, bit for bit, without an
 // exchange.
+#include <algorithm>
 #include <array>
 #include "bindings/common.hpp"
 #include "steps/settled_anderson.hpp"
@@ -26,16 +27,25 @@ struct NodeSums {
   std::array<double, M> sums(Index n, int m, F&& f) const {
     const std::uint8_t* flag = rows.data();
     std::array<ExactBins, M> bins;
-    for (Index i = 0; i * width < n; ++i) {
-      std::array<double, M> node{};
-      for (Index k = i * width; k < (i + 1) * width; ++k) f(k, node.data());  // every entry: the step writes its slots here
-      if (!flag[i]) continue;
-      for (int j = 0; j < m; ++j)
-        if (!exact_detail::add_double(bins[j], node[j]))
-          throw InputError("a dot product of the Anderson step has a non-finite term at node " + std::to_string(i));
+    std::array<ExactAccumulator, M> acc;
+    const Index nodes = n / width;
+    for (Index start = 0; start < nodes; start += ExactBins::kTermsPerFlush) {
+      const Index end = std::min<Index>(nodes, start + ExactBins::kTermsPerFlush);
+      for (Index i = start; i < end; ++i) {
+        std::array<double, M> node{};
+        for (Index k = i * width; k < (i + 1) * width; ++k) f(k, node.data());  // every entry: the step writes its slots here
+        if (!flag[i]) continue;
+        for (int j = 0; j < m; ++j)
+          if (!exact_detail::add_double(bins[j], node[j]))
+            throw InputError("a dot product of the Anderson step has a non-finite term at node " + std::to_string(i));
+      }
+      for (int j = 0; j < m; ++j) {
+        bins[j].flush_into(acc[j]);
+        acc[j].normalise();
+      }
     }
     py::list local;
-    for (int j = 0; j < m; ++j) local.append(exact_int(bins[j].sum()));
+    for (int j = 0; j < m; ++j) local.append(exact_int(acc[j]));
     const py::list total = combine(local);
     std::array<double, M> out{};
     for (int j = 0; j < m; ++j) out[j] = total[j].cast<double>();

@@ -130,8 +130,8 @@ struct LocalContactLevel {
     {
       py::gil_scoped_release free;
       ExactBins bins;
-      for (Index i = 0; i < A.rows; ++i) {
-        if (!flag[i]) continue;
+      acc = exact_detail::sum_items(bins, A.rows, [&](Index i) {
+        if (!flag[i]) return;
         A.prefetch_ahead(i, x, z);
         prefetch_row_values<d>(vals, A.indptr.data(), i, kPrefetchValueRows, A.rows);
         double w[d] = {};
@@ -141,8 +141,7 @@ struct LocalContactLevel {
         for (int a = 0; a < d; ++a) y[d * i + a] = add ? y[d * i + a] + w[a] : w[a];
         if (!exact_detail::add_double(bins, s))
           throw InputError("|u - old|_A^2 has a non-finite term at row " + std::to_string(i) + ": the iterate is no longer finite");
-      }
-      acc = bins.sum();
+      });
     }
     return exact_int(acc);
   }
