@@ -341,9 +341,9 @@ class DistributedMonotoneStep:
         self.halo = None if is_serial(comm) else lev.halo  # one rank: no ghosts, nothing to exchange
         self.colours = _colour_rows(comm, lev)
         self.order = np.concatenate(self.colours or [np.zeros(0, np.int64)])
-        # the fine residual is formed at set-up only where it is read before the restriction (the
-        # contact rows, which the linearization reads, and the rows sent to other ranks); the
-        # restriction forms the other owned rows in its own pass (the serial step's fused residual)
+        # the linearization forms the fine residual only where it is read before the restriction
+        # (the contact rows, which it reads, and the rows sent to other ranks); the restriction
+        # forms the other owned rows in its own pass (the serial step's fused residual)
         sent = [np.asarray(v, np.int64) for v in (self.halo.send.values() if self.halo is not None else ())]
         self.residual_rows = np.unique(np.concatenate([fine.contact_nodes[fine.owned_contacts]] + sent)).astype(np.int64)
         self.known = (~self.owned).astype(np.uint8)  # ghost rows: their owners'
