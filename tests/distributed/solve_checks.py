@@ -40,4 +40,4 @@ def solve_case(name, comm):
     return {"u": u, "cycles": result.cycles, "converged": result.converged,
             "correction": np.array([h["correction_norm"] for h in result.history]),
             "energy": np.array([h["energy"] for h in result.history]),
-            "contact_nodes": problem.num_contact, "slip_nodes": result.slip_nodes}
+            "contact_nodes": problem.num_contact, "slip_nodes": result.slip_nodes, "rebuilds": result.rebuilds}

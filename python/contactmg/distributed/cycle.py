@@ -370,7 +370,7 @@ class DistributedMonotoneStep:
         self.phase_seconds = {k: 0.0 for k in ("pre_smooth", "linearize", "coarse_update", "coarse_correction",
                                                "post_smooth", "norm")}
         self.notes = []
-        self.rebuilds = 1  # coarse hierarchies built (the set-up's included)
+        self.rebuilds = 0  # coarse rebuilds in the solve (the first cycle's update included, the set-up build not: the serial count)
         # Coulomb: the frozen bound leaves a slow linear contraction once the state settles
         # the serial step's Anderson mixing with its dot products as node sums over the ranks (bind_anderson.cpp)
         self.anderson = _core.NodeAnderson(self.owned_u8, d, lambda totals: exact_totals(totals, comm)) \
