@@ -147,7 +147,7 @@ def test_flat_mortar_rows_sum_to_D_and_reproduce_linear_fields(scell, mcell, sji
     xs, fs = _surface(scell, 5, 4, 0.0, BOTTOM, sjit, seed=1)
     xm, fm = _surface(mcell, 3, 7, -0.02, TOP, mjit, seed=2)
     c = mortar_coupling_3d(xs, fs, xm, fm, search=0.1)
-    assert c.covered.all()
+    assert len(c.uncovered) == 0 and len(c.excluded) == 0
     assert np.allclose(c.D, _lumped_measure(xs, fs, c.nonmortar_nodes), rtol=1e-13, atol=0)
     assert np.allclose(np.asarray(c.M.sum(axis=1)).ravel(), c.D, rtol=1e-12, atol=0)
     assert np.allclose(c.normals, [0.0, 0.0, -1.0], atol=1e-14)
@@ -172,18 +172,39 @@ def test_matching_surfaces_give_node_to_node_coupling():
         assert np.allclose(xm[Mh.indices], xs[c.nonmortar_nodes], atol=1e-14)
 
 
-def test_partly_covered_nonmortar_nodes_are_flagged():
-    """A mortar surface over half of the nonmortar one: nodes whose support sticks out are not
-    covered; the covered rows still sum to D."""
+def test_partly_covered_nonmortar_nodes_keep_a_consistent_condition():
+    """A mortar surface over part of the nonmortar one (its edge cuts through nonmortar elements):
+    the nodes of the cut elements keep their condition with the dual basis of the covered part, D =
+    the covered measure of their support, rows of M summing to D (a rigid translation of both bodies
+    moves no weighted gap) and D^{-1} M reproducing linear fields; nodes not reached are reported."""
     xs, fs = _surface("hexahedron", 4, 4, 0.0, BOTTOM)
     xm, fm = _surface("tetra", 3, 3, -0.01, TOP)
-    xm[:, 0] *= 0.5  # the mortar side spans x in [0, 0.5]
+    xm[:, 0] *= 0.4  # the mortar side spans x in [0, 0.4]: its edge cuts the nonmortar column 0.25..0.5
     c = mortar_coupling_3d(xs, fs, xm, fm, search=0.1)
     x = xs[c.nonmortar_nodes]
-    assert np.array_equal(c.covered, x[:, 0] <= 0.25 + 1e-12)
+    assert np.all(x[:, 0] <= 0.5 + 1e-12) and np.any(x[:, 0] > 0.25 + 1e-12)
+    assert len(c.uncovered) and np.all(xs[c.uncovered, 0] >= 0.5 - 1e-12)
     rows = np.asarray(c.M.sum(axis=1)).ravel()
-    assert np.allclose(rows[c.covered], c.D[c.covered], rtol=1e-12)
-    assert np.all(rows[~c.covered] < c.D[~c.covered] * (1 - 1e-3))
+    assert np.allclose(rows, c.D, rtol=1e-10)
+    # D: the measure of the part of each support with x <= 0.4 (a grid of 0.25 x 0.25 quads)
+    h = 0.25
+    expected = np.zeros(len(x))
+    for i, (px, py) in enumerate(x[:, :2]):
+        for cx in (px - h, px):
+            for cy in (py - h, py):
+                if not (0 <= cx < 1 - 1e-12 and 0 <= cy < 1 - 1e-12):
+                    continue
+                # int over the quad [cx, cx+h] x [cy, cy+h] cut at x = 0.4 of the bilinear hat of (px, py)
+                lo, hi = cx, min(cx + h, 0.4)
+                if hi <= lo:
+                    continue
+                fx = lambda t: 1 - abs(t - px) / h  # noqa: E731
+                gx = np.polynomial.legendre.leggauss(4)
+                t = lo + (gx[0] + 1) / 2 * (hi - lo)
+                expected[i] += np.sum(gx[1] * fx(t)) * (hi - lo) / 2 * h / 2
+    assert np.allclose(c.D, expected, rtol=1e-9)
+    field = lambda y: y @ np.array([[1.0, 0.5, 0.2], [0.3, -1.0, 0.4], [0.1, 0.2, 1.0]]) + [0.1, 0.2, 0.3]  # noqa: E731
+    assert np.allclose(c.Mhat @ field(xm), field(x + [0.0, 0.0, -0.01]), atol=1e-10)
 
 
 def test_bad_surfaces_are_clear_errors():
@@ -318,7 +339,7 @@ def test_spheres_mortar_rows_sum_to_D_on_the_curved_non_matching_domes(spheres_l
     p, _ = spheres_l2
     c = p.coupling
     rows = np.asarray(c.M.sum(axis=1)).ravel()
-    assert c.covered.all() and len(c.D) >= 25  # the zone (r < 0.15) is inside where the normals reach the lower dome
+    assert len(c.uncovered) == 0 and len(c.excluded) == 0 and len(c.D) >= 25  # the zone (r < 0.15) is inside where the normals reach the lower dome
     assert np.allclose(rows, c.D, rtol=1e-6, atol=0)  # measured 1e-11
     # the facets are quads on a sphere: D is close to a quarter of the areas around the node
     sm = p.parts[0].mesh

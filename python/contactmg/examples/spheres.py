@@ -103,8 +103,7 @@ def two_body_p0(load: float, R1: float, R2: float, m1: Material, m2: Material) -
 def relative_displacement(problem: Problem, result) -> np.ndarray:
     """w = T^{-1} u = u - N u: at the nonmortar nodes the displacement relative to the mortar side's
     (D^{-1} M u_m), the unknowns the nodal conditions are posed on."""
-    u = np.asarray(result.displacement)
-    return u - problem.N @ u
+    return problem.relative_displacement(np.asarray(result.displacement))
 
 
 def check_conditions(problem: Problem, result) -> dict:

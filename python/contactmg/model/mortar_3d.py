@@ -15,9 +15,11 @@ auxiliary plane through its centre), the two convex polygons are clipped (Suther
 the intersection is cut into triangles (a fan: it is convex) and each is integrated by a
 degree-5 Gauss rule. At a quadrature point the nonmortar and mortar local coordinates are those
 whose (projected) images are the point; the measure is the nonmortar surface's (the plane's area
-times J_surface / J_plane, 1 on a flat triangle). Where the mortar surface covers the support of
-psi_p, sum_q M_pq = int psi_p = D_p; a nonmortar node whose support is not covered is flagged
-(covered[p] = False) and left out of the contact, as in 2D.
+times J_surface / J_plane, 1 on a flat triangle). The integrals are kept per overlapping pair
+(int phi_i phi_j^mortar) and per nonmortar element over its covered part, and mortar.dual_coupling
+makes the dual basis of each element's covered part from them (the standard one where the element is
+covered), takes out the nodes that cannot carry a condition by the boundary modification, and
+assembles M = sum over pairs of A_e (int phi phi^mortar).
 
 Normal and gap per nonmortar node: n_p the area-weighted average of the element normals around p
 (outward of the nonmortar body), g_p = (D^{-1} M x_m - x_p) . n_p: D^{-1} times the weighted gap
@@ -32,7 +34,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.spatial import cKDTree
 
-from ..model.mortar import MortarCoupling
+from ..model.mortar import MortarCoupling, dual_coupling
 
 # points per direction of the collapsed Gauss rule on the fan triangles of nonmortar quads
 QUAD_RULE_POINTS = 5
@@ -247,12 +249,13 @@ def _in_plane(X: np.ndarray, c: np.ndarray, e1: np.ndarray, e2: np.ndarray) -> n
 
 
 def mortar_coupling_3d(xs: np.ndarray, slave_facets: np.ndarray, xm: np.ndarray, master_facets: np.ndarray,
-                       search: float) -> MortarCoupling:
+                       search: float, fixed: np.ndarray = None) -> MortarCoupling:
     """The dual mortar matrices of the nonmortar surface `slave_facets` (triangles or quads of node
     ids of the points xs, oriented with the outward normal of their body by the right-hand rule)
     against the mortar surface `master_facets` of xm (oriented likewise, out of the other body).
     A nonmortar element couples with the mortar elements that face it within distance `search`
-    along its normal (on either side: an initial penetration is seen too)."""
+    along its normal (on either side: an initial penetration is seen too). `fixed` (len(xs), 3):
+    the nonmortar mesh's Dirichlet-prescribed axes (see mortar.dual_coupling)."""
     xs, xm = np.asarray(xs, dtype=float), np.asarray(xm, dtype=float)
     sf = _check_surface(xs, slave_facets, "nonmortar")
     mf = _check_surface(xm, master_facets, "mortar")
@@ -260,11 +263,9 @@ def mortar_coupling_3d(xs: np.ndarray, slave_facets: np.ndarray, xm: np.ndarray,
         raise ValueError(f"the mortar search distance must be positive and finite, got {search!r}")
     nodes, local = np.unique(sf, return_inverse=True)
     local = local.reshape(sf.shape)
-    ns, ks, km = len(nodes), sf.shape[1], mf.shape[1]
+    ns, ks, km, E = len(nodes), sf.shape[1], mf.shape[1], len(sf)
     XS, XM = xs[sf], xm[mf]
-    A, De = element_dual_coefficients(XS)
-    D = np.zeros(ns)
-    np.add.at(D, local.ravel(), De.ravel())
+    A_full, De_full = element_dual_coefficients(XS)
     cS, nS, e1, e2, areaS = _element_frames(XS)
     cM, nM, _, _, _ = _element_frames(XM)
     normals = np.zeros((ns, 3))
@@ -273,8 +274,8 @@ def mortar_coupling_3d(xs: np.ndarray, slave_facets: np.ndarray, xm: np.ndarray,
     normals /= np.linalg.norm(normals, axis=1)[:, None]
 
     iS, iM = _candidate_pairs(XS, cS, nS, XM, cM, nM, search)
-    rows_out, cols_out, vals_out = [], [], []
-    covered_int = np.zeros(ns)
+    Mc, mc, area = np.zeros((E, ks, ks)), np.zeros((E, ks)), np.zeros(E)
+    pair_e, pair_m, pair_E = [], [], []
     for chunk in np.array_split(np.arange(len(iS)), max(1, len(iS) // 20000)):
         if len(chunk) == 0:
             continue
@@ -283,8 +284,8 @@ def mortar_coupling_3d(xs: np.ndarray, slave_facets: np.ndarray, xm: np.ndarray,
         S2, M2 = _in_plane(XS[a], cS[a], e1[a], e2[a]), _in_plane(XM[b], cS[a], e1[a], e2[a])
         # the mortar element faces the other way: reversed, its projection runs counter-clockwise
         P, cnt = clip_polygons(M2[:, ::-1], np.full(len(a), km), S2, np.full(len(a), ks))
-        area = polygon_area(P, cnt)
-        keep = (cnt >= 3) & (area > 1e-12 * np.linalg.norm(areaS[a], axis=1))
+        parea = polygon_area(P, cnt)
+        keep = (cnt >= 3) & (parea > 1e-12 * np.linalg.norm(areaS[a], axis=1))
         if not np.any(keep):
             continue
         a, b, S2, M2, P, cnt = a[keep], b[keep], S2[keep], M2[keep], P[keep], cnt[keep]
@@ -307,26 +308,19 @@ def mortar_coupling_3d(xs: np.ndarray, slave_facets: np.ndarray, xm: np.ndarray,
             Js = surface_jacobian(XS[a[q]], 4, xi_s[:, None, :])[:, 0]
             Gp = plane_jacobian(S2[q], xi_s)
             w = w * Js / np.abs(Gp[:, 0, 0] * Gp[:, 1, 1] - Gp[:, 0, 1] * Gp[:, 1, 0])
-        psi = (A[a[q]] * phi_s[:, None, :]).sum(axis=2)
-        wpsi = w[:, None] * psi
-        contrib = wpsi[:, :, None] * phi_m[:, None, :]   # (points, ks, km)
+        wphi = w[:, None] * phi_s
         # summed per pair (the points of a pair are consecutive)
         starts = np.flatnonzero(np.r_[True, q[1:] != q[:-1]])
         pairs = q[starts]
-        contrib = np.add.reduceat(contrib, starts, axis=0)
-        cov = np.add.reduceat(w[:, None] * phi_s, starts, axis=0)
-        rows_out.append(np.broadcast_to(local[a[pairs]][:, :, None], contrib.shape).ravel())
-        cols_out.append(np.broadcast_to(mf[b[pairs]][:, None, :], contrib.shape).ravel())
-        vals_out.append(contrib.ravel())
-        np.add.at(covered_int, local[a[pairs]].ravel(), cov.ravel())
-    if rows_out:
-        M = sp.csr_matrix((np.concatenate(vals_out), (np.concatenate(rows_out), np.concatenate(cols_out))),
-                          shape=(ns, len(xm)))
+        pair_e.append(a[pairs])
+        pair_m.append(b[pairs])
+        pair_E.append(np.add.reduceat(wphi[:, :, None] * phi_m[:, None, :], starts, axis=0))
+        np.add.at(Mc, a[pairs], np.add.reduceat(wphi[:, :, None] * phi_s[:, None, :], starts, axis=0))
+        np.add.at(mc, a[pairs], np.add.reduceat(wphi, starts, axis=0))
+        np.add.at(area, a[pairs], np.add.reduceat(w, starts))
+    if pair_e:
+        pairs = (np.concatenate(pair_e), np.concatenate(pair_m), np.concatenate(pair_E))
     else:
-        M = sp.csr_matrix((ns, len(xm)))
-    M.sum_duplicates()
-    # exact where the integrands are polynomials (triangles, parallelograms); on warped or
-    # non-parallelogram nonmortar quads psi is not polynomial in the plane's coordinates and the
-    # degree-5 rule leaves a relative 1e-5..1e-4: covered means "short by less than that"
-    covered = covered_int >= D * (1 - 1e-4 if ks == 4 else 1 - 1e-9)
-    return MortarCoupling(nodes, D, M, normals, covered)
+        pairs = (np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros((0, ks, km)))
+    return dual_coupling(nodes, local, len(xs), A_full, De_full, (Mc, mc, area), pairs, mf, len(xm), normals,
+                         fixed, k_full=ks)

@@ -286,10 +286,10 @@ class Problem:
         self.body_id = np.repeat(np.arange(len(bodies)), sizes).astype(np.int32)
         self.hierarchy = bodies[pairs[0].nonmortar].hierarchy  # for reports (kind, levels)
         self.material = bodies[pairs[0].nonmortar].material
-        fine = self._level_coupling(levels.pop() - 1, [p.fixed.any(axis=1) for p in self.parts])
+        fine = self._level_coupling(levels.pop() - 1, [p.fixed for p in self.parts])
         self.couplings = fine["couplings"]
-        self.N = fine["N"]
-        Tk = sp.kron(sp.identity(n) + self.N, sp.identity(d), format="csr")
+        self.N, self.Nk = fine["N"], fine["Nk"]
+        Tk = (sp.identity(n * d, format="csr") + self.Nk).tocsr()
         self.A_canonical = sp.block_diag([_bsr(p.A, p.mesh.num_points, d) for p in self.parts], format="csr")
         self.load_canonical = np.vstack([p.load for p in self.parts])
         self._Tk = Tk
@@ -321,11 +321,11 @@ class Problem:
         self.pair_of_contact = self.contact_source  # pair k >= 0; -1 - j: obstacle contact j
         self.contact = ContactBoundary(nodes.astype(np.int64), normals, gaps, measure,
                                        facets=np.ascontiguousarray(np.vstack(facets)),
-                                       frames=contact_frames(normals, self.fixed[nodes]) if self.obstacle_contacts
-                                       else contact_frames(normals))
+                                       frames=contact_frames(normals, self.fixed[nodes]))
         self.coefficients = friction_coefficients(self.friction, self.contact)
         self.transfers = self._transfers()
         self._check_bodies_held()
+        self.notes = tuple(self.notes) + tuple(_coupling_notes(self.couplings))
 
     @property
     def multibody(self) -> bool:
@@ -516,18 +516,22 @@ class Problem:
 
     def _level_coupling(self, level: int, held: Sequence[np.ndarray]) -> dict:
         """The pairs' dual mortar couplings on the meshes of `level`: N_l (union numbering of that
-        level) and, per kept nonmortar node, its union id, normal, gap, measure D and pair.
-        A nonmortar node is kept where the mortar side covers the support of its dual basis
-        function and no Dirichlet data (`held[body]`, per node of the body's mesh) holds it."""
+        level, scalar weights per node pair), its block form Nk_l (the prescribed axes of a node left
+        alone) and, per nonmortar node that carries a condition, its union id, normal, gap, measure
+        D and pair. `held[body]`: the Dirichlet-prescribed axes of the body's mesh nodes (n, d), or
+        (n,) for nodes held in every axis. A nonmortar node prescribed along its normal, or whose
+        support faces the mortar side over too little, is taken out by the boundary modification
+        of the dual basis (mortar.py); the counts are kept for the notes."""
         import scipy.sparse as sp  # only several bodies need it (a one-body process need not load scipy)
 
         from .mortar import mortar_coupling_2d
         from .mortar_3d import mortar_coupling_3d
         meshes = [b.hierarchy.finest if level == b.hierarchy.levels - 1 else b.hierarchy.meshes[level]
                   for b in self.bodies]
+        d = meshes[0].dim
         offsets = np.r_[0, np.cumsum([m.num_points for m in meshes])].astype(np.int64)
         n = int(offsets[-1])
-        rows, cols, vals = [], [], []
+        rows, cols, vals, free_rows = [], [], [], []
         out = {k: [] for k in ("nodes", "normals", "gaps", "measure", "pair", "facets")}
         couplings = []
         for k, q in enumerate(self.pairs):
@@ -536,34 +540,45 @@ class Problem:
             if not np.any(msel):
                 raise ValueError(f"no facet of body {q.mortar} carries the mortar tags {list(q.mortar_tags)}")
             ssel = self._nonmortar_facet_mask(q, sm)
-            c = (mortar_coupling_2d if sm.dim == 2 else mortar_coupling_3d)(sm.points, sm.facets[ssel], mm.points, mm.facets[msel], q.search)
+            fixed = np.asarray(held[q.nonmortar], bool)
+            if fixed.ndim == 1:
+                fixed = np.repeat(fixed[:, None], d, axis=1)
+            c = (mortar_coupling_2d if d == 2 else mortar_coupling_3d)(sm.points, sm.facets[ssel], mm.points,
+                                                                       mm.facets[msel], q.search, fixed=fixed)
             couplings.append(c)
-            keep = c.covered & ~held[q.nonmortar][c.nonmortar_nodes]
-            if not np.any(keep):
+            if len(c.nonmortar_nodes) == 0:
                 raise ValueError(f"no nonmortar node of contact pair {k} sees the mortar boundary within the search "
                                  "distance (or every one is held by Dirichlet data)")
-            Mhat = c.Mhat[keep].tocoo()
-            nodes = c.nonmortar_nodes[keep] + offsets[q.nonmortar]
-            rows.append(nodes[Mhat.row])
-            cols.append(Mhat.col + offsets[q.mortar])
-            vals.append(Mhat.data)
+            nodes = c.nonmortar_nodes + offsets[q.nonmortar]
+            # u_p = w_p + (Mhat u_m)_p - (Shat u_s)_p on the node's free axes
+            for W, off, sign in ((c.Mhat.tocoo(), offsets[q.mortar], 1.0), (c.Shat.tocoo(), offsets[q.nonmortar], -1.0)):
+                rows.append(nodes[W.row])
+                cols.append(W.col + off)
+                vals.append(sign * W.data)
+                free_rows.append(c.free[W.row])
             out["nodes"].append(nodes)
-            out["normals"].append(c.normals[keep])
-            out["gaps"].append(c.gaps(sm.points, mm.points)[keep])
-            out["measure"].append(c.D[keep])
+            out["normals"].append(c.normals)
+            out["gaps"].append(c.gaps(sm.points, mm.points))
+            out["measure"].append(c.D)
             out["pair"].append(np.full(len(nodes), k, np.int32))
             out["facets"].append(sm.facets[ssel] + offsets[q.nonmortar])
         res = {key: np.concatenate(v) for key, v in out.items()}
         if len(np.unique(res["nodes"])) != len(res["nodes"]):
             raise ValueError("a node is a nonmortar node of two contact pairs (pairs must not share nonmortar nodes)")
-        N = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(n, n))
+        r, cl, v, fr = (np.concatenate(x) for x in (rows, cols, vals, free_rows))
+        N = sp.csr_matrix((v, (r, cl)), shape=(n, n))
         N.sum_duplicates()
         N.eliminate_zeros()
         # T^{-1} = I - N needs N^2 = 0: no mortar node of one pair is a nonmortar node of another
         if (abs(N) @ abs(N)).nnz:
             raise ValueError("a mortar node of one contact pair is a nonmortar node of another: make that body the "
                              "nonmortar (or the mortar) side of both its pairs")
-        res["N"], res["couplings"] = N, couplings
+        # the block form: a node's prescribed axes keep u = w (its Dirichlet value holds for w)
+        ax = np.nonzero(fr)
+        Nk = sp.csr_matrix((v[ax[0]], (r[ax[0]] * d + ax[1], cl[ax[0]] * d + ax[1])), shape=(n * d, n * d))
+        Nk.sum_duplicates()
+        Nk.eliminate_zeros()
+        res["N"], res["Nk"], res["couplings"] = N, Nk, couplings
         return res
 
     def _transfers(self):
@@ -591,12 +606,26 @@ class Problem:
 
     def to_canonical(self, w: np.ndarray) -> np.ndarray:
         """The displacement u = T w of the problem's unknowns w (one body: w itself)."""
-        return w + self.N @ w if self.multibody else w
+        if not self.multibody:
+            return w
+        w = np.asarray(w)
+        return w + (self.Nk @ w.ravel()).reshape(w.shape)
 
     def relative_displacement(self, u: np.ndarray) -> np.ndarray:
         """w = T^{-1} u = u - N u: at a nonmortar node its displacement relative to the mortar side's
-        (D^{-1} M u_m); elsewhere u itself."""
-        return u - self.N @ u if self.multibody else u
+        (D^{-1} M u_m, in its free axes); elsewhere u itself."""
+        if not self.multibody:
+            return u
+        u = np.asarray(u)
+        return u - (self.Nk @ u.ravel()).reshape(u.shape)
+
+    def canonical_forces(self, f: np.ndarray) -> np.ndarray:
+        """Nodal forces (n, d) of the unknowns w as forces on the displacement u: T^{-T} f = f - N^T f
+        (one body: f itself)."""
+        if not self.multibody:
+            return f
+        f = np.asarray(f)
+        return f - (self.Nk.T @ f.ravel()).reshape(f.shape)
 
     # The load and the Dirichlet values (n, d): held until a solver has its own copies
     # (release_vectors), then made again from the description when asked for (the same bits: the
@@ -814,6 +843,20 @@ def _items(value, types: tuple, message: str) -> list:
         if not isinstance(item, types):
             raise TypeError(f"{message}, got {type(item).__name__}")
     return items
+
+
+def _coupling_notes(couplings) -> List[str]:
+    """What the mortar couplings did on their own: nonmortar nodes with no condition of their own."""
+    notes = []
+    for k, c in enumerate(couplings):
+        if len(c.excluded):
+            notes.append(f"contact pair {k}: {len(c.excluded)} nonmortar node(s) held along their normal by Dirichlet "
+                         "data carry no contact condition of their own (the dual basis of their neighbours is "
+                         "modified to cover their support)")
+        if len(c.uncovered):
+            notes.append(f"contact pair {k}: {len(c.uncovered)} nonmortar node(s) face the mortar side over less than "
+                         "1 % of their support within the search distance and carry no contact condition")
+    return notes
 
 
 def _split_contacts(bodies, obstacle, pairs, contacts):

@@ -202,7 +202,7 @@ class ContactResult:
         p = self._known_problem("canonical_load()")
         if self.load is None:
             return p.load_canonical if p.multibody else p.load
-        return self.load - p.N.T @ self.load if p.multibody else self.load
+        return p.canonical_forces(self.load)
 
     def residual(self) -> np.ndarray:
         """A u - f (n, d) of the canonical displacement u with the bodies' own stiffness: at a fixed
