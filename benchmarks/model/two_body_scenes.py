@@ -196,8 +196,8 @@ def rings_michell(p2=RING_P2):
     shear): per ring phi = (A r^2 + B r^4 + C r^-2 + D) cos 2 theta; eight conditions, sigma_r(a) =
     -p2, tau(a) = 0, tau_inner(b) = tau_outer(b) = 0, sigma_r,inner(b) = sigma_r,outer(b),
     u_r,inner(b) = u_r,outer(b), sigma_r(c) = tau(c) = 0, solved as a linear system; q2 =
-    -sigma_r(b). The displacement formulas are checked against Hooke's law by finite differences
-    in the benchmark's tests of this module (they hold to 1e-9)."""
+    -sigma_r(b). The displacement formulas satisfy Hooke's law (plane strain) and the
+    strain-displacement relations with these stresses: checked by central differences to 1e-9."""
     def rows(r, m):
         return np.array([_michell2(*np.eye(4)[i], r, m) for i in range(4)]).T  # 3 x 4
     a_in, b_in = rows(RING_A, RING_INNER), rows(RING_B, RING_INNER)
