@@ -433,12 +433,12 @@ def stack_problem(size: float = 0.1, levels: int = None, friction: float = 0.3):
 # ---------------------------------------------------------------------------------------------
 def nonmortar_nodes_left_out(problem):
     """What the contact boundary of `problem` leaves out: per pair, the nonmortar facet nodes (of
-    the facets with its nonmortar tags, within its region) that are not contact nodes, as a dict
-    {"total", "left_out", "held", "uncovered"}: "held" of them have a component fixed by a
-    Dirichlet condition (a symmetry plane), "uncovered" do not have the support of their dual basis
-    function covered by the mortar side (a node can be both). One body on an obstacle: the nodes
-    of its contact-tag facets that are not contact nodes (a list of one dict, held and uncovered
-    not told apart)."""
+    the facets with its nonmortar tags, within its region) that carry no contact condition, as a dict
+    {"total", "left_out", "held", "uncovered"}: "held" are held along their normal (or in every
+    axis) by Dirichlet data, "uncovered" face the mortar side over less than 1 % of their support
+    (mortar.MIN_NODE_COVER); both are taken out by the boundary modification of the dual basis.
+    One body on an obstacle: the nodes of its contact-tag facets that are not contact nodes (a list
+    of one dict, held and uncovered not told apart)."""
     keep = problem.contact.nodes
     if not problem.multibody:
         m = problem.mesh
@@ -449,31 +449,10 @@ def nonmortar_nodes_left_out(problem):
     res = []
     for q, c in zip(problem.pairs, problem.couplings):
         off = problem.offsets[q.nonmortar]
-        out = ~np.isin(c.nonmortar_nodes + off, keep)
-        held = problem.fixed[c.nonmortar_nodes + off].any(axis=1)
-        res.append({"total": len(c.nonmortar_nodes), "left_out": int(out.sum()),
-                    "held": int((out & held).sum()), "uncovered": int((out & ~c.covered).sum())})
+        kept = int(np.isin(c.nonmortar_nodes + off, keep).sum())
+        total = len(c.nonmortar_nodes) + len(c.excluded) + len(c.uncovered)
+        res.append({"total": total, "left_out": total - kept, "held": len(c.excluded), "uncovered": len(c.uncovered)})
     return res
-
-
-def left_out_penetration(problem, result):
-    """The largest weak penetration (w_n - g)_+ of the nonmortar nodes left out of the contact
-    boundary (see nonmortar_nodes_left_out) whose dual support the mortar side covers, relative to
-    the largest displacement: the weak condition these nodes would have had, with w_p = u_p -
-    (D^-1 M u_mortar)_p and g_p = (D^-1 M x_mortar - x_p) . n_p. None for one body."""
-    if not problem.multibody:
-        return None
-    u = np.asarray(result.displacement)
-    worst = 0.0
-    for q, c in zip(problem.pairs, problem.couplings):
-        ms = problem.bodies[q.nonmortar].hierarchy.finest
-        mm = problem.bodies[q.mortar].hierarchy.finest
-        us = u[problem.offsets[q.nonmortar]:problem.offsets[q.nonmortar + 1]]
-        um = u[problem.offsets[q.mortar]:problem.offsets[q.mortar + 1]]
-        wn = np.einsum("ij,ij->i", us[c.nonmortar_nodes] - c.Mhat @ um, c.normals) - c.gaps(ms.points, mm.points)
-        out = ~np.isin(c.nonmortar_nodes + problem.offsets[q.nonmortar], problem.contact.nodes) & c.covered
-        worst = max(worst, float(np.max(wn[out], initial=0.0)))
-    return worst / max(float(np.abs(u).max()), 1e-300)
 
 
 def body_balance(result):

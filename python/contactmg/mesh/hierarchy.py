@@ -163,6 +163,9 @@ class MeshHierarchy:
         self._recipe: Optional[Tuple[Mesh, Optional[Projector], bool]] = None
         # build() with a projector: the smallest cell quality of every level (hierarchy_quality)
         self.min_quality: Optional[List[float]] = None
+        # the boundary projection of build() (the curved surfaces the meshes approximate), or None:
+        # contact pairs measure their gaps between those surfaces
+        self.projector: Optional[Projector] = None
         self._finest: Optional[Mesh] = None  # the finest mesh while the others are released
         self._levels = 0
 
@@ -332,6 +335,7 @@ class MeshHierarchy:
             relax = bool(getattr(projector, "relax", False))
         h = cls(*_refine_uniformly(mesh, levels, projector, relax), time.perf_counter() - t0)
         h._recipe = (mesh, projector, bool(relax))
+        h.projector = projector
         if projector is not None:
             h.min_quality = [float(cell_quality(m).min()) for m in h.meshes]
             q0 = h.min_quality[0]

@@ -259,9 +259,6 @@ class Problem:
         for q in pairs:
             if q.nonmortar == q.mortar or not all(0 <= k < len(bodies) for k in (q.nonmortar, q.mortar)):
                 raise ValueError("a contact pair needs two different bodies of the problem")
-        levels = {b.hierarchy.levels for b in bodies}
-        if len(levels) != 1:
-            raise ValueError(f"the bodies' hierarchies need the same number of levels, got {sorted(levels)}")
         dims = {b.hierarchy.finest.dim for b in bodies}
         if len(dims) != 1:
             raise ValueError(f"the bodies need one dimension, got {sorted(dims)}")
@@ -286,7 +283,7 @@ class Problem:
         self.body_id = np.repeat(np.arange(len(bodies)), sizes).astype(np.int32)
         self.hierarchy = bodies[pairs[0].nonmortar].hierarchy  # for reports (kind, levels)
         self.material = bodies[pairs[0].nonmortar].material
-        fine = self._level_coupling(levels.pop() - 1, [p.fixed for p in self.parts])
+        fine = self._level_coupling(None, [p.fixed for p in self.parts])
         self.couplings = fine["couplings"]
         self.N, self.Nk = fine["N"], fine["Nk"]
         Tk = (sp.identity(n * d, format="csr") + self.Nk).tocsr()
@@ -325,7 +322,8 @@ class Problem:
         self.coefficients = friction_coefficients(self.friction, self.contact)
         self.transfers = self._transfers()
         self._check_bodies_held()
-        self.notes = tuple(self.notes) + tuple(_coupling_notes(self.couplings))
+        self.notes = (tuple(f"body {k}: {note}" for k, part in enumerate(self.parts) for note in part.notes)
+                      + tuple(_coupling_notes(self.couplings)))
 
     @property
     def multibody(self) -> bool:
@@ -515,7 +513,7 @@ class Problem:
         return sel
 
     def _level_coupling(self, level: int, held: Sequence[np.ndarray]) -> dict:
-        """The pairs' dual mortar couplings on the meshes of `level`: N_l (union numbering of that
+        """The pairs' dual mortar couplings on the meshes of `level` (None: each body's finest): N_l (union numbering of that
         level, scalar weights per node pair), its block form Nk_l (the prescribed axes of a node left
         alone) and, per nonmortar node that carries a condition, its union id, normal, gap, measure
         D and pair. `held[body]`: the Dirichlet-prescribed axes of the body's mesh nodes (n, d), or
@@ -524,9 +522,9 @@ class Problem:
         of the dual basis (mortar.py); the counts are kept for the notes."""
         import scipy.sparse as sp  # only several bodies need it (a one-body process need not load scipy)
 
-        from .mortar import mortar_coupling_2d
+        from .mortar import covers_facets, exact_gap_correction, mortar_coupling_2d
         from .mortar_3d import mortar_coupling_3d
-        meshes = [b.hierarchy.finest if level == b.hierarchy.levels - 1 else b.hierarchy.meshes[level]
+        meshes = [b.hierarchy.finest if level is None or level == b.hierarchy.levels - 1 else b.hierarchy.meshes[level]
                   for b in self.bodies]
         d = meshes[0].dim
         offsets = np.r_[0, np.cumsum([m.num_points for m in meshes])].astype(np.int64)
@@ -543,8 +541,15 @@ class Problem:
             fixed = np.asarray(held[q.nonmortar], bool)
             if fixed.ndim == 1:
                 fixed = np.repeat(fixed[:, None], d, axis=1)
+            # the surfaces the meshes approximate, where the bodies' hierarchies know them
+            ps, pm = (getattr(self.bodies[b].hierarchy, "projector", None) for b in (q.nonmortar, q.mortar))
+            ps = ps if covers_facets(ps, sm.points, sm.facets[ssel], sm.facet_tags[ssel]) else None
+            pm = pm if covers_facets(pm, mm.points, mm.facets[msel], mm.facet_tags[msel]) else None
+            exact = (exact_gap_correction(ps, sm.facet_tags[ssel], pm, mm.facet_tags[msel])
+                     if ps is not None or pm is not None else None)
             c = (mortar_coupling_2d if d == 2 else mortar_coupling_3d)(sm.points, sm.facets[ssel], mm.points,
-                                                                       mm.facets[msel], q.search, fixed=fixed)
+                                                                       mm.facets[msel], q.search, fixed=fixed,
+                                                                       exact_gap=exact)
             couplings.append(c)
             if len(c.nonmortar_nodes) == 0:
                 raise ValueError(f"no nonmortar node of contact pair {k} sees the mortar boundary within the search "
@@ -582,12 +587,25 @@ class Problem:
         return res
 
     def _transfers(self):
-        """Per level the union of the bodies' interpolations; on the finest, T^{-1} P = (I - N) P."""
+        """Per level the union of the bodies' prolongations, their own levels and those made below
+        their coarse meshes (_coarsen_below): a body with fewer levels than another keeps its
+        coarsest level on the levels below it (identity prolongations), so bodies of unequal
+        hierarchies (each coarsened from its own fine mesh, or refined a different number of times)
+        form one multigrid. On the finest, T^{-1} P = (I - N) P."""
         import scipy.sparse as sp  # only several bodies need it (a one-body process need not load scipy)
-        levels = self.bodies[0].hierarchy.levels
+        own = [[t.matrix() for t in part.transfers] for part in self.parts]
+        levels = max(len(t) for t in own) + 1
         out = []
         for l in range(levels - 1):
-            P = sp.block_diag([b.hierarchy.transfers[l].matrix() for b in self.bodies], format="csr")
+            blocks = []
+            for part, ts in zip(self.parts, own):
+                k = l - (levels - 1 - len(ts))
+                if k >= 0:
+                    blocks.append(ts[k])
+                else:
+                    n0 = ts[0].shape[1] if ts else part.mesh.num_points
+                    blocks.append(sp.identity(n0, format="csr"))
+            P = sp.block_diag(blocks, format="csr")
             if l == levels - 2:
                 P = (sp.identity(P.shape[0]) - self.N) @ P
             out.append(Transfer.from_matrix(P))
@@ -734,12 +752,16 @@ class Problem:
             return
         coarse = h.meshes[0]
         dofs = coarse.num_points * coarse.dim
-        alone = h.levels == 1 and coarse.num_points > COARSEN_DOWN_TO_NODES
+        alone = h.levels == 1
         if dofs <= MAX_COARSEST_DOFS and not alone:
             return
         from ..mesh.coarsening import coarsening_prolongations
 
-        below = coarsening_prolongations(coarse, coarsest=COARSEN_DOWN_TO_NODES)
+        # a lone mesh of few nodes still gets coarse levels (its sweeps alone took 55 cycles on 338
+        # dofs): down to an eighth of its nodes
+        n = coarse.num_points
+        coarsest = COARSEN_DOWN_TO_NODES if n > COARSEN_DOWN_TO_NODES else max(coarse.dim + 2, n // 8)
+        below = coarsening_prolongations(coarse, coarsest=coarsest)
         if not below:
             return
         self.transfers = [Transfer.from_matrix(P) for P in below] + self.transfers
