@@ -111,3 +111,48 @@ def run_child(code: str, *argv, timeout: float | None = None) -> dict:
         tail = r.stderr.strip().splitlines()[-1] if r.stderr.strip() else f"exit status {r.returncode}"
         return {"error": tail}
     return json.loads(r.stdout.strip().splitlines()[-1])
+
+
+def gmsh_mesh(build, classify, size, dim, one_region: bool = False):
+    """The mesh gmsh makes of the geometry `build()` adds (OpenCASCADE), with physical groups: each
+    boundary entity tagged classify(its centre of mass), and every volume (surface in 2D) its own
+    region tag 1, 2, ... (one_region: all of them region 1). `size`: a number (element sizes between
+    size / 2 and size) or a callable (x, y, z) -> element size. gmsh is a dependency of contactmg."""
+    import tempfile
+
+    import gmsh
+    import numpy as np
+
+    import contactmg as cm
+
+    gmsh.initialize()
+    gmsh.option.setNumber("General.Terminal", 0)
+    try:
+        gmsh.model.add("m")
+        build()
+        gmsh.model.occ.synchronize()
+        if callable(size):
+            gmsh.model.mesh.setSizeCallback(lambda d, t, x, y, z, lc: size(x, y, z))
+            for option in ("MeshSizeExtendFromBoundary", "MeshSizeFromPoints", "MeshSizeFromCurvature"):
+                gmsh.option.setNumber(f"Mesh.{option}", 0)
+        else:
+            gmsh.option.setNumber("Mesh.MeshSizeMax", size)
+            gmsh.option.setNumber("Mesh.MeshSizeMin", size / 2)
+        volumes = gmsh.model.getEntities(dim)
+        if one_region:
+            gmsh.model.addPhysicalGroup(dim, [t for _, t in volumes], 1)
+        else:
+            for k, (_, tag) in enumerate(volumes):
+                gmsh.model.addPhysicalGroup(dim, [tag], k + 1)
+        groups = {}
+        for _, tag in gmsh.model.getBoundary(volumes, combined=False, oriented=False):
+            groups.setdefault(classify(np.array(gmsh.model.occ.getCenterOfMass(dim - 1, abs(tag)))), set()).add(abs(tag))
+        for ptag, tags in groups.items():
+            gmsh.model.addPhysicalGroup(dim - 1, sorted(tags), ptag)
+        gmsh.model.mesh.generate(dim)
+        with tempfile.TemporaryDirectory() as tmp:
+            path = os.path.join(tmp, "m.msh")
+            gmsh.write(path)
+            return cm.read_mesh(path, dim=dim)
+    finally:
+        gmsh.finalize()

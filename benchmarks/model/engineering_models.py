@@ -12,49 +12,17 @@ from __future__ import annotations
 
 import os
 import sys
-import tempfile
 import time
 
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-from _common import parser, write_result  # noqa: E402
+from _common import gmsh_mesh, parser, write_result  # noqa: E402
 
 import contactmg as cm  # noqa: E402
 from contactmg.results.checks import contact_conditions  # noqa: E402
 
 BOTTOM, TOP, SIDE, OTHER = 1, 2, 3, 4
-
-
-def gmsh_mesh(build, classify, size, dim):
-    """The mesh gmsh makes of the geometry `build()` adds (OpenCASCADE), with physical groups: each
-    boundary entity tagged classify(centre of mass) and every volume entity (surface in 2D) its own
-    region tag (1, 2, ...), meshed with element size `size`."""
-    import gmsh
-
-    gmsh.initialize()
-    gmsh.option.setNumber("General.Terminal", 0)
-    try:
-        gmsh.model.add("m")
-        build()
-        gmsh.model.occ.synchronize()
-        gmsh.option.setNumber("Mesh.MeshSizeMax", size)
-        gmsh.option.setNumber("Mesh.MeshSizeMin", size / 2)
-        volumes = gmsh.model.getEntities(dim)
-        for k, (_, tag) in enumerate(volumes):
-            gmsh.model.addPhysicalGroup(dim, [tag], k + 1)
-        groups = {}
-        for _, tag in gmsh.model.getBoundary(volumes, combined=False, oriented=False):
-            groups.setdefault(classify(np.array(gmsh.model.occ.getCenterOfMass(dim - 1, abs(tag)))), set()).add(abs(tag))
-        for ptag, tags in groups.items():
-            gmsh.model.addPhysicalGroup(dim - 1, sorted(tags), ptag)
-        gmsh.model.mesh.generate(dim)
-        with tempfile.TemporaryDirectory() as tmp:
-            path = os.path.join(tmp, "m.msh")
-            gmsh.write(path)
-            return cm.read_mesh(path, dim=dim)
-    finally:
-        gmsh.finalize()
 
 
 def balance(res) -> float:

@@ -99,7 +99,8 @@ def test_two_cylinders(gallery, tmp_path):
     ax = out["figure"].axes[0]
     lines = {line.get_label(): line for line in ax.get_lines()}
     n, t = lines["normal stress"].get_ydata(), lines["tangential stress"].get_ydata()
-    assert np.all(np.abs(t) <= 0.4 * np.abs(n) * (1 + 1e-6) + 1e-9)  # Coulomb's bound holds
+    # Coulomb's bound holds (to round-off of the largest stress: a free node keeps forces of 1e-11 of it)
+    assert np.all(np.abs(t) <= 0.4 * np.abs(n) * (1 + 1e-6) + 1e-9 * np.abs(n).max())
     # the tangential stress is odd about the centre (the same curvature above and below)
     assert abs(t.max() + t.min()) < 0.05 * t.max()
 

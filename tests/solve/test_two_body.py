@@ -335,8 +335,6 @@ def test_two_body_bad_input_is_a_clear_error():
         TwoBodyProblem(bodies, ContactPair(0, 0, [RECT_BOTTOM], [RECT_TOP], search=0.1))
     with pytest.raises(ValueError, match="search distance"):
         TwoBodyProblem(bodies, ContactPair(0, 1, [RECT_BOTTOM], [RECT_TOP], search=-1.0))
-    with pytest.raises(ValueError, match="same number of levels"):
-        TwoBodyProblem([bodies[0], Body(lower.truncated(2), MAT, bodies[1].dirichlet)], pair)
     with pytest.raises(ValueError, match="mortar tags"):
         TwoBodyProblem(bodies, ContactPair(0, 1, [RECT_BOTTOM], [99], search=0.1))
     far = MeshHierarchy.build(rectangle(5, 3, 1, 1, origin=(0.0, -3.0)), 3)  # 2 below the upper block

@@ -71,7 +71,6 @@ class MortarCoupling:
     free: np.ndarray = None       # (ns, d) bool
     excluded: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
     uncovered: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
-    gap_shift: np.ndarray = None  # (ns, d): D^{-1} int psi_p (true - faceted distance), or None
 
     @property
     def Mhat(self) -> sp.csr_matrix:
@@ -84,19 +83,42 @@ class MortarCoupling:
         return sp.diags(1.0 / self.D) @ self.S
 
     def gaps(self, nonmortar_points: np.ndarray, mortar_points: np.ndarray) -> np.ndarray:
-        """g_p = (Mhat x_m - x_p - Shat x_s + gap_shift) . n_p: the weighted gap of the dual basis,
-        between the surfaces the meshes approximate where the bodies' hierarchies know them (gap_shift:
-        the weighted difference of the true and the faceted distance), else between the facets."""
+        """g_p = (Mhat x_m - x_p - Shat x_s) . n_p: the weighted gap of the dual basis between the
+        facets (see true_gaps for the gap between the surfaces the facets approximate)."""
         x = self.Mhat @ mortar_points - nonmortar_points[self.nonmortar_nodes] - self.Shat @ nonmortar_points
-        if self.gap_shift is not None:
-            x = x + self.gap_shift
         return np.einsum("ij,ij->i", x, self.normals)
+
+    def true_gaps(self, nonmortar_points: np.ndarray, project_mortar, mortar_tags: np.ndarray) -> np.ndarray:
+        """g_p: the distance along n_p from each node (on its body's surface) to the mortar surface,
+        where `project_mortar(points, tags)` (the closest point) describes that surface (see
+        covers_facets; `mortar_tags` per node: the tag of the mortar facets it faces). The ray is
+        followed to the tangent plane at the closest point until it lands (Newton's method on the
+        distance: the closest point's direction alone is the mortar's normal, 35 degrees off n_p at
+        a third of the radius from two touching spheres' contact point).
+        Why: two faceted approximations of one curved surface (concentric rings meshed apart) cut
+        into each other by about h^2 / 8R between their facets, an interference that does not scale
+        with the load and dominates the pressure of stiff bodies; between the surfaces it is zero.
+        The nodal value is the one-body obstacle's gap: a dual-weighted average of a curved gap
+        (two spheres touching, a gap of r^2 / R) falls below the nodal value by O(h^2 / R) where
+        the dual basis has its negative lobes."""
+        x = nonmortar_points[self.nonmortar_nodes]
+        n = self.normals
+        s = np.zeros(len(x))
+        for _ in range(20):
+            y = x + s[:, None] * n
+            v = np.asarray(project_mortar(y, mortar_tags), float) - y
+            vv, vn = np.einsum("ij,ij->i", v, v), np.einsum("ij,ij->i", v, n)
+            # the step to the tangent plane at the closest point; none where the ray grazes it
+            step = np.where(np.abs(vn) > 1e-3 * np.sqrt(vv), vv / np.where(vn == 0, 1.0, vn), 0.0)
+            s += step
+            if np.all(np.abs(step) <= 1e-15 * (1.0 + np.abs(s))):
+                break
+        return s
 
 
 def dual_coupling(nodes: np.ndarray, local: np.ndarray, n_nonmortar: int, A_full: np.ndarray, De_full: np.ndarray,
                   covered_moments: tuple, pairs: tuple, mortar_facets: np.ndarray, n_mortar: int,
-                  node_normals: np.ndarray, fixed: np.ndarray = None, k_full: int = 2,
-                  gap_moments: np.ndarray = None) -> MortarCoupling:
+                  node_normals: np.ndarray, fixed: np.ndarray = None, k_full: int = 2) -> MortarCoupling:
     """The coupling from the overlaps, in both dimensions.
 
     nodes (ns,): the nonmortar facets' node ids; local (E, k): each facet's nodes as indices into
@@ -105,8 +127,7 @@ def dual_coupling(nodes: np.ndarray, local: np.ndarray, n_nonmortar: int, A_full
     measure over each facet's covered part; pairs = (facet (P,), mortar facet (P,), E (P, k, km)):
     per overlapping pair int phi_i phi_j^mortar over the overlap; node_normals (ns, d): averaged
     outward normals; fixed (n_nonmortar, d) or None: the Dirichlet-prescribed axes of the nonmortar
-    mesh's nodes; k_full: the facets' vertex count for FULL_COVER; gap_moments (P, k, d) or None: per
-    pair int phi_i (true - faceted distance vector) over the overlap (see exact_gap_correction)."""
+    mesh's nodes; k_full: the facets' vertex count for FULL_COVER."""
     Mc, mc, area = covered_moments
     E, k = local.shape
     ns, d = len(nodes), node_normals.shape[1]
@@ -173,19 +194,12 @@ def dual_coupling(nodes: np.ndarray, local: np.ndarray, n_nonmortar: int, A_full
     else:
         M = sp.csr_matrix((len(keep_rows), n_mortar))
     M.sum_duplicates()
-    shift = None
-    if gap_moments is not None and len(fe):
-        g = np.einsum("pij,pjd->pid", A[fe], gap_moments)          # int psi_i (true - faceted)
-        shift = np.zeros((ns, d))
-        np.add.at(shift, local[fe].ravel(), g.reshape(-1, d))
-        shift = shift[keep_rows] / D[keep_rows, None]
     S_rows = new_row[np.asarray(S_rows, np.int64)] if S_rows else np.zeros(0, np.int64)
     S = sp.csr_matrix((np.asarray(S_vals, float), (S_rows, np.asarray(S_cols, np.int64))),
                       shape=(len(keep_rows), n_nonmortar))
     S.sum_duplicates()
     return MortarCoupling(nodes[keep_rows], D[keep_rows], M, np.ascontiguousarray(normals[keep_rows]), S=S,
-                          free=free[keep_rows], excluded=nodes[held & (D > 0)], uncovered=nodes[uncovered],
-                          gap_shift=shift)
+                          free=free[keep_rows], excluded=nodes[held & (D > 0)], uncovered=nodes[uncovered])
 
 
 def _segment_normals(x: np.ndarray, segs: np.ndarray) -> np.ndarray:
@@ -195,13 +209,12 @@ def _segment_normals(x: np.ndarray, segs: np.ndarray) -> np.ndarray:
 
 
 def mortar_coupling_2d(xs: np.ndarray, slave_segs: np.ndarray, xm: np.ndarray, master_segs: np.ndarray,
-                       search: float, fixed: np.ndarray = None, exact_gap=None) -> MortarCoupling:
+                       search: float, fixed: np.ndarray = None) -> MortarCoupling:
     """The dual mortar matrices of the nonmortar segments `slave_segs` (pairs of node ids of the
     points xs, oriented with the body on the left) against the mortar segments `master_segs` of
     xm. A nonmortar point sees the mortar segment hit by its normal ray within distance `search`
     (the nearest one, on either side: an initial penetration is seen too). `fixed` (len(xs), 2):
-    the nonmortar mesh's Dirichlet-prescribed axes (see dual_coupling); exact_gap: see
-    exact_gap_correction."""
+    the nonmortar mesh's Dirichlet-prescribed axes (see dual_coupling)."""
     slave_segs = np.asarray(slave_segs, dtype=np.int64).reshape(-1, 2)
     master_segs = np.asarray(master_segs, dtype=np.int64).reshape(-1, 2)
     if len(slave_segs) == 0 or len(master_segs) == 0:
@@ -219,7 +232,6 @@ def mortar_coupling_2d(xs: np.ndarray, slave_segs: np.ndarray, xm: np.ndarray, m
     normals /= np.linalg.norm(normals, axis=1)[:, None]
     Mc, mc, area = np.zeros((E, 2, 2)), np.zeros((E, 2)), np.zeros(E)
     pair_e, pair_m, pair_E = [], [], []
-    points = []  # per Gauss point: pair, weight, xi, the nonmortar and mortar points
 
     ma, mb = xm[master_segs[:, 0]], xm[master_segs[:, 1]]
     for k, (a, b) in enumerate(slave_segs):
@@ -247,8 +259,6 @@ def mortar_coupling_2d(xs: np.ndarray, slave_segs: np.ndarray, xm: np.ndarray, m
                 w = (hi - lo) * L / 2  # Gauss weight 1/2 on [0, 1] times ds
                 eta = _line_parameter(A + xi * (B - A), n, ma[q], mb[q])
                 phi = np.array([1 - xi, xi])
-                if exact_gap is not None:
-                    points.append((len(pair_e), w, xi, *(A + xi * (B - A)), *(ma[q] + eta * (mb[q] - ma[q]))))
                 Ek += w * np.outer(phi, [1 - eta, eta])
                 Mc[k] += w * np.outer(phi, phi)
                 mc[k] += w * phi
@@ -260,34 +270,8 @@ def mortar_coupling_2d(xs: np.ndarray, slave_segs: np.ndarray, xm: np.ndarray, m
     De_full = np.repeat(seg_len[:, None] / 2, 2, axis=1)
     pairs = (np.asarray(pair_e, np.int64), np.asarray(pair_m, np.int64),
              np.asarray(pair_E, float).reshape(-1, 2, 2))
-    moments = None
-    if exact_gap is not None and points:
-        P = np.asarray(points)
-        pair, w, xi = P[:, 0].astype(np.int64), P[:, 1], P[:, 2]
-        corr = exact_gap(P[:, 3:5], pairs[0][pair], P[:, 5:7], pairs[1][pair])
-        moments = np.zeros((len(pairs[0]), 2, 2))
-        np.add.at(moments, pair, (w * (1 - xi))[:, None, None] * np.r_[1.0, 0.0][None, :, None] * corr[:, None, :]
-                  + (w * xi)[:, None, None] * np.r_[0.0, 1.0][None, :, None] * corr[:, None, :])
     return dual_coupling(nodes, local, len(xs), A_full, De_full, (Mc, mc, area), pairs, master_segs, len(xm),
-                         normals, fixed, k_full=2, gap_moments=moments)
-
-
-def exact_gap_correction(project_nonmortar, nonmortar_tags: np.ndarray, project_mortar, mortar_tags: np.ndarray):
-    """The exact_gap callable of the coupling functions, from the surfaces the meshes approximate:
-    project_nonmortar / project_mortar (a hierarchy's `projector(points, tags)` known to describe
-    that side's contact facets, see covers_facets; None: the facets are the surface). At an overlap
-    point x_s (on nonmortar facet f_s) facing x_m (on mortar facet f_m) it returns how much the
-    distance between the surfaces, from y = P_s(x_s) to its closest point P_m(y), differs from the
-    facets' distance x_m - x_s. Why: two faceted approximations of one curved surface (concentric
-    rings meshed apart) cut into each other by about h^2 / 8R, an interference that does not scale
-    with the load and dominates the pressure of stiff bodies; between the true surfaces it is zero
-    (to round-off, which the closest point of y keeps: the difference of two closest points P_m(x_m)
-    - P_s(x_s) would leave a positive O(h^3 / R^2), a gap that is never quite closed)."""
-    def correction(xs, fs, xm, fm):
-        y = xs if project_nonmortar is None else np.asarray(project_nonmortar(xs, nonmortar_tags[fs]), float)
-        true = xm - y if project_mortar is None else np.asarray(project_mortar(y, mortar_tags[fm]), float) - y
-        return true - (xm - xs)
-    return correction
+                         normals, fixed, k_full=2)
 
 
 def covers_facets(project, points: np.ndarray, facets: np.ndarray, tags: np.ndarray) -> bool:

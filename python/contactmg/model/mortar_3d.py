@@ -249,14 +249,13 @@ def _in_plane(X: np.ndarray, c: np.ndarray, e1: np.ndarray, e2: np.ndarray) -> n
 
 
 def mortar_coupling_3d(xs: np.ndarray, slave_facets: np.ndarray, xm: np.ndarray, master_facets: np.ndarray,
-                       search: float, fixed: np.ndarray = None, exact_gap=None) -> MortarCoupling:
+                       search: float, fixed: np.ndarray = None) -> MortarCoupling:
     """The dual mortar matrices of the nonmortar surface `slave_facets` (triangles or quads of node
     ids of the points xs, oriented with the outward normal of their body by the right-hand rule)
     against the mortar surface `master_facets` of xm (oriented likewise, out of the other body).
     A nonmortar element couples with the mortar elements that face it within distance `search`
     along its normal (on either side: an initial penetration is seen too). `fixed` (len(xs), 3):
-    the nonmortar mesh's Dirichlet-prescribed axes (see mortar.dual_coupling); exact_gap: see
-    mortar.exact_gap_correction."""
+    the nonmortar mesh's Dirichlet-prescribed axes (see mortar.dual_coupling)."""
     xs, xm = np.asarray(xs, dtype=float), np.asarray(xm, dtype=float)
     sf = _check_surface(xs, slave_facets, "nonmortar")
     mf = _check_surface(xm, master_facets, "mortar")
@@ -276,7 +275,7 @@ def mortar_coupling_3d(xs: np.ndarray, slave_facets: np.ndarray, xm: np.ndarray,
 
     iS, iM = _candidate_pairs(XS, cS, nS, XM, cM, nM, search)
     Mc, mc, area = np.zeros((E, ks, ks)), np.zeros((E, ks)), np.zeros(E)
-    pair_e, pair_m, pair_E, pair_G = [], [], [], []
+    pair_e, pair_m, pair_E = [], [], []
     for chunk in np.array_split(np.arange(len(iS)), max(1, len(iS) // 20000)):
         if len(chunk) == 0:
             continue
@@ -319,16 +318,9 @@ def mortar_coupling_3d(xs: np.ndarray, slave_facets: np.ndarray, xm: np.ndarray,
         np.add.at(Mc, a[pairs], np.add.reduceat(wphi[:, :, None] * phi_s[:, None, :], starts, axis=0))
         np.add.at(mc, a[pairs], np.add.reduceat(wphi, starts, axis=0))
         np.add.at(area, a[pairs], np.add.reduceat(w, starts))
-        if exact_gap is not None:
-            # the points on both facets (3D positions of their local coordinates)
-            ps = np.einsum("pk,pkd->pd", phi_s, XS[a[q]])
-            pm = np.einsum("pk,pkd->pd", phi_m, XM[b[q]])
-            corr = exact_gap(ps, a[q], pm, b[q])
-            pair_G.append(np.add.reduceat(wphi[:, :, None] * corr[:, None, :], starts, axis=0))
     if pair_e:
         pairs = (np.concatenate(pair_e), np.concatenate(pair_m), np.concatenate(pair_E))
     else:
         pairs = (np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros((0, ks, km)))
-    moments = np.concatenate(pair_G) if pair_G else None
     return dual_coupling(nodes, local, len(xs), A_full, De_full, (Mc, mc, area), pairs, mf, len(xm), normals,
-                         fixed, k_full=ks, gap_moments=moments)
+                         fixed, k_full=ks)

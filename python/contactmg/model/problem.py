@@ -522,7 +522,7 @@ class Problem:
         of the dual basis (mortar.py); the counts are kept for the notes."""
         import scipy.sparse as sp  # only several bodies need it (a one-body process need not load scipy)
 
-        from .mortar import covers_facets, exact_gap_correction, mortar_coupling_2d
+        from .mortar import covers_facets, mortar_coupling_2d
         from .mortar_3d import mortar_coupling_3d
         meshes = [b.hierarchy.finest if level is None or level == b.hierarchy.levels - 1 else b.hierarchy.meshes[level]
                   for b in self.bodies]
@@ -541,15 +541,8 @@ class Problem:
             fixed = np.asarray(held[q.nonmortar], bool)
             if fixed.ndim == 1:
                 fixed = np.repeat(fixed[:, None], d, axis=1)
-            # the surfaces the meshes approximate, where the bodies' hierarchies know them
-            ps, pm = (getattr(self.bodies[b].hierarchy, "projector", None) for b in (q.nonmortar, q.mortar))
-            ps = ps if covers_facets(ps, sm.points, sm.facets[ssel], sm.facet_tags[ssel]) else None
-            pm = pm if covers_facets(pm, mm.points, mm.facets[msel], mm.facet_tags[msel]) else None
-            exact = (exact_gap_correction(ps, sm.facet_tags[ssel], pm, mm.facet_tags[msel])
-                     if ps is not None or pm is not None else None)
             c = (mortar_coupling_2d if d == 2 else mortar_coupling_3d)(sm.points, sm.facets[ssel], mm.points,
-                                                                       mm.facets[msel], q.search, fixed=fixed,
-                                                                       exact_gap=exact)
+                                                                       mm.facets[msel], q.search, fixed=fixed)
             couplings.append(c)
             if len(c.nonmortar_nodes) == 0:
                 raise ValueError(f"no nonmortar node of contact pair {k} sees the mortar boundary within the search "
@@ -563,7 +556,18 @@ class Problem:
                 free_rows.append(c.free[W.row])
             out["nodes"].append(nodes)
             out["normals"].append(c.normals)
-            out["gaps"].append(c.gaps(sm.points, mm.points))
+            # the gap between the surfaces the facets approximate where the mortar body's hierarchy knows it
+            pm = getattr(self.bodies[q.mortar].hierarchy, "projector", None)
+            if covers_facets(pm, mm.points, mm.facets[msel], mm.facet_tags[msel]):
+                g = c.true_gaps(sm.points, pm, _facing_tags(c, mm.facets[msel], mm.facet_tags[msel]))
+            else:
+                g = c.gaps(sm.points, mm.points)
+            # a gap at the round-off of the geometry is a touching contact: exactly zero (a node left a
+            # round-off's room from its bound is not active, and its slack would hold back every
+            # coarse correction near it until the smoother closes it)
+            size = c.D if d == 2 else np.sqrt(c.D)  # D_p: the measure of the node's support
+            g[np.abs(g) <= TOUCHING_GAP * size] = 0.0
+            out["gaps"].append(g)
             out["measure"].append(c.D)
             out["pair"].append(np.full(len(nodes), k, np.int32))
             out["facets"].append(sm.facets[ssel] + offsets[q.nonmortar])
@@ -802,6 +806,9 @@ class Problem:
 # as the coarse level took 2.98 s, with aggregates below it 0.42 s; the paper's coarsest, 2,286 dofs
 # at most, stay as they are).
 MAX_COARSEST_DOFS = 4000
+# A weighted gap of a contact pair below this fraction of its node's facet size is round-off of the
+# geometry (coincident surfaces measured between their projections give 1e-12): a touching contact.
+TOUCHING_GAP = 1e-9
 COARSEN_DOWN_TO_NODES = 200
 
 
@@ -865,6 +872,17 @@ def _items(value, types: tuple, message: str) -> list:
         if not isinstance(item, types):
             raise TypeError(f"{message}, got {type(item).__name__}")
     return items
+
+
+def _facing_tags(c, facets: np.ndarray, tags: np.ndarray) -> np.ndarray:
+    """Per kept nonmortar node of coupling c the tag of a mortar facet it faces: one holding the
+    mortar node of its largest weight in M."""
+    M = c.M.tocsr()
+    top = np.array([M.indices[a + np.argmax(M.data[a:b])] if b > a else -1 for a, b in zip(M.indptr[:-1], M.indptr[1:])])
+    tag_of_node = np.full(M.shape[1], tags[0] if len(tags) else 0)
+    for k in range(facets.shape[1]):
+        tag_of_node[facets[:, k]] = tags
+    return tag_of_node[np.maximum(top, 0)]
 
 
 def _coupling_notes(couplings) -> List[str]:

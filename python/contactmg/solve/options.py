@@ -311,9 +311,10 @@ def resolve_options(problem, options=None) -> SolverOptions:
     omega: DEFAULT_OMEGA of the cell type (1 where it has none); omega_post: omega where omega is
     given, else DEFAULT_OMEGA_POST_ADAPTIVE on 2D adaptive hierarchies, else omega; petrov_galerkin
     and upwind_contact_sweep: on for 2D adaptive hierarchies under Coulomb friction;
-    projected_coarse_correction: on where a contact frame is rotated; local_smoothing: on for
-    adaptive hierarchies; ordering: DEFAULT_ORDERING; switch_rate: SWITCH_RATE where the method is the
-    solver's choice, Algorithm 2, and the coarse levels were made from a fine mesh alone, else 0. Left
+    projected_coarse_correction: on where a contact frame is rotated on one body (off for several
+    bodies, 0032-two-body-cycle); local_smoothing: on for adaptive hierarchies; ordering:
+    DEFAULT_ORDERING; switch_rate: SWITCH_RATE where the method is the solver's choice, Algorithm 2,
+    and the coarse levels were made from a fine mesh alone or the bodies are several, else 0. Left
     None: linear and lines (the core's own)."""
     o = options_from(options)
     chosen = o.method is None
@@ -336,12 +337,14 @@ def resolve_options(problem, options=None) -> SolverOptions:
     if o.upwind_contact_sweep is None:
         changes["upwind_contact_sweep"] = bool(algorithm2 and adaptive_2d and coulomb)
     if o.projected_coarse_correction is None:
-        changes["projected_coarse_correction"] = bool(algorithm2 and problem.rotated_frames())
+        changes["projected_coarse_correction"] = bool(algorithm2 and problem.rotated_frames()
+                                                        and not getattr(problem, "multibody", False))
     if o.local_smoothing is None:
         changes["local_smoothing"] = problem.hierarchy.kind == "adaptive"
     if o.ordering is None:
         changes["ordering"] = DEFAULT_ORDERING
     if o.switch_rate is None:
-        auto = chosen and o.method == "nmg" and problem.law != "linear" and problem.coarse_levels_from_mesh()
+        auto = (chosen and o.method == "nmg" and problem.law != "linear"
+                and (problem.coarse_levels_from_mesh() or getattr(problem, "multibody", False)))
         changes["switch_rate"] = SWITCH_RATE if auto else 0.0
     return o.replace(**changes) if changes else o

@@ -20,11 +20,10 @@ The helpers at the end measure what the contact boundary of a problem leaves out
 from __future__ import annotations
 
 import math
-import os
-import tempfile
 
 import numpy as np
 
+import _common
 import contactmg as cm
 
 # facet tags shared by the scenes
@@ -32,40 +31,8 @@ CONTACT, TOP, BOTTOM, SYM_X, SYM_Y, SYM_Z, INNER, OUTER, SIDE = 1, 2, 3, 4, 5, 6
 
 
 def gmsh_mesh(build, classify, size, dim):
-    """The mesh gmsh makes of the geometry `build()` adds (OpenCASCADE): every boundary entity in
-    the physical group classify(its centre of mass), all volumes (surfaces in 2D) region 1.
-    `size` is a number (uniform) or a callable (x, y, z) -> element size."""
-    import gmsh
-
-    gmsh.initialize()
-    gmsh.option.setNumber("General.Terminal", 0)
-    try:
-        gmsh.model.add("m")
-        build()
-        gmsh.model.occ.synchronize()
-        if callable(size):
-            gmsh.model.mesh.setSizeCallback(lambda d, t, x, y, z, lc: size(x, y, z))
-            gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
-            gmsh.option.setNumber("Mesh.MeshSizeFromPoints", 0)
-            gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 0)
-        else:
-            gmsh.option.setNumber("Mesh.MeshSizeMax", size)
-            gmsh.option.setNumber("Mesh.MeshSizeMin", size / 2)
-        volumes = gmsh.model.getEntities(dim)
-        gmsh.model.addPhysicalGroup(dim, [t for _, t in volumes], 1)
-        groups = {}
-        for _, tag in gmsh.model.getBoundary(volumes, combined=False, oriented=False):
-            c = np.array(gmsh.model.occ.getCenterOfMass(dim - 1, abs(tag)))
-            groups.setdefault(classify(c), set()).add(abs(tag))
-        for ptag, tags in groups.items():
-            gmsh.model.addPhysicalGroup(dim - 1, sorted(tags), ptag)
-        gmsh.model.mesh.generate(dim)
-        with tempfile.TemporaryDirectory() as tmp:
-            path = os.path.join(tmp, "m.msh")
-            gmsh.write(path)
-            return cm.read_mesh(path, dim=dim)
-    finally:
-        gmsh.finalize()
+    """_common.gmsh_mesh with all volumes (surfaces in 2D) region 1."""
+    return _common.gmsh_mesh(build, classify, size, dim, one_region=True)
 
 
 def projectors(*projs):
@@ -105,8 +72,9 @@ def roller_problem(half: bool, levels: int, friction: float = 0.0, h0: float = R
     """A steel roller (radius 50, its upper half cut off flat at y = R; E 210000, nu 0.3) on an
     aluminium block (200 x 100, or 100 x 100 in the half model; E 70000, nu 0.3), plane strain,
     touching at the origin. The line load P is a uniform pressure P / (2R) on the roller's flat top;
-    the block's bottom is clamped. Half model: the symmetry plane x = 0 cuts both bodies (u_x = 0
-    there). The roller is the nonmortar side. The coarse mesh has size h0 at the contact (growing
+    the block's bottom is clamped. Full model: the flat top is guided (u_x = 0: without it only the
+    tilt of the discrete arc's normals would hold the frictionless roller sideways). Half model: the
+    symmetry plane x = 0 cuts both bodies (u_x = 0 there). The roller is the nonmortar side. The coarse mesh has size h0 at the contact (growing
     away from it); `levels` uniform levels, so the contact size is h0 / 2^(levels-1)."""
     import gmsh
     R = ROLLER_R
@@ -141,7 +109,9 @@ def roller_problem(half: bool, levels: int, friction: float = 0.0, h0: float = R
     hr = cm.MeshHierarchy.build(mr, levels, projector=cm.CircleProjector((0.0, R), R, (CONTACT,)))
     hb = cm.MeshHierarchy.build(mb, levels)
     sym = [cm.Dirichlet([SYM_X], (0.0, None))] if half else []
-    bodies = [cm.Body(hr, STEEL, sym, pressure={TOP: ROLLER_P / (2 * R)}),
+    # the press guides the roller: its flat top keeps x (the half model's symmetry plane does that)
+    guide = sym if half else [cm.Dirichlet([TOP], (0.0, None))]
+    bodies = [cm.Body(hr, STEEL, guide, pressure={TOP: ROLLER_P / (2 * R)}),
               cm.Body(hb, ALU, [cm.Dirichlet([BOTTOM], (0.0, 0.0))] + sym)]
     pair = cm.ContactPair(0, 1, [CONTACT], [CONTACT], search=5.0, region=lambda mid: np.abs(mid[:, 0]) < 20)
     law = cm.Coulomb(friction) if friction else cm.Frictionless()
@@ -153,10 +123,10 @@ def roller_problem(half: bool, levels: int, friction: float = 0.0, h0: float = R
 # ---------------------------------------------------------------------------------------------
 RING_A, RING_B, RING_C = 50.0, 75.0, 100.0
 RING_INNER, RING_OUTER = cm.Material(210000.0, 0.3), cm.Material(70000.0, 0.3)
-# The interface is a circle on both sides, but the mortar side between its nodes is a polygon:
-# its chords cut into the circle by h^2 / (8 R), an interference whose pressure (about E h^2 /
-# (8 R^2)) does not scale with the load. A large load keeps it a small part of the interface
-# pressure; the problem is linear in the load, so the value itself does not matter.
+# The interface is a circle on both sides; between their nodes both meshes are polygons whose chords
+# would cut into each other by about h^2 / (8 R) if the gaps were measured between the facets. They
+# are measured between the circles (the hierarchies' projectors), so the load's size does not matter
+# (the problem is linear in it).
 RING_P0, RING_P2 = 1000.0, 500.0
 
 
@@ -261,7 +231,7 @@ def rings_problem(levels: int, size: float = 10.0, p2: float = RING_P2, mesh_lev
 # ---------------------------------------------------------------------------------------------
 # 3. concentric hollow spheres (octant)
 # ---------------------------------------------------------------------------------------------
-# A large pressure, for the reason given at RING_P0: the faceted spheres interfere by about h^2 / 8.
+# The gaps are measured between the spheres (see RING_P0): the size of the pressure does not matter.
 SHELL_A, SHELL_B, SHELL_C, SHELL_P = 0.5, 1.0, 1.5, 1.0e5
 SHELL_INNER, SHELL_OUTER = cm.Material(210000.0, 0.3), cm.Material(70000.0, 0.3)
 
