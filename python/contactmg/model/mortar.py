@@ -88,13 +88,17 @@ class MortarCoupling:
         x = self.Mhat @ mortar_points - nonmortar_points[self.nonmortar_nodes] - self.Shat @ nonmortar_points
         return np.einsum("ij,ij->i", x, self.normals)
 
-    def true_gaps(self, nonmortar_points: np.ndarray, project_mortar, mortar_tags: np.ndarray) -> np.ndarray:
+    def true_gaps(self, nonmortar_points: np.ndarray, project_mortar, mortar_tags: np.ndarray,
+                  project_nonmortar=None, nonmortar_tags: np.ndarray = None) -> np.ndarray:
         """g_p: the distance along n_p from each node (on its body's surface) to the mortar surface,
         where `project_mortar(points, tags)` (the closest point) describes that surface (see
         covers_facets; `mortar_tags` per node: the tag of the mortar facets it faces). The ray is
         followed to the tangent plane at the closest point until it lands (Newton's method on the
         distance: the closest point's direction alone is the mortar's normal, 35 degrees off n_p at
-        a third of the radius from two touching spheres' contact point).
+        a third of the radius from two touching spheres' contact point). With `project_nonmortar`
+        (and the nodes' `nonmortar_tags`) the ray starts from the node's closest point on its own
+        surface: a node refined on an edge between a curved and a flat facet may have been left on
+        the chord (0.3 % of the radius off a sphere's octant edge).
         Why: two faceted approximations of one curved surface (concentric rings meshed apart) cut
         into each other by about h^2 / 8R between their facets, an interference that does not scale
         with the load and dominates the pressure of stiff bodies; between the surfaces it is zero.
@@ -102,6 +106,8 @@ class MortarCoupling:
         (two spheres touching, a gap of r^2 / R) falls below the nodal value by O(h^2 / R) where
         the dual basis has its negative lobes."""
         x = nonmortar_points[self.nonmortar_nodes]
+        if project_nonmortar is not None:
+            x = np.asarray(project_nonmortar(x, nonmortar_tags), float)
         n = self.normals
         s = np.zeros(len(x))
         for _ in range(20):

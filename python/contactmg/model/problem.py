@@ -559,7 +559,10 @@ class Problem:
             # the gap between the surfaces the facets approximate where the mortar body's hierarchy knows it
             pm = getattr(self.bodies[q.mortar].hierarchy, "projector", None)
             if covers_facets(pm, mm.points, mm.facets[msel], mm.facet_tags[msel]):
-                g = c.true_gaps(sm.points, pm, _facing_tags(c, mm.facets[msel], mm.facet_tags[msel]))
+                ps = getattr(self.bodies[q.nonmortar].hierarchy, "projector", None)
+                ps = ps if covers_facets(ps, sm.points, sm.facets[ssel], sm.facet_tags[ssel]) else None
+                own = _node_tags(c.nonmortar_nodes, sm.facets[ssel], sm.facet_tags[ssel], sm.num_points)
+                g = c.true_gaps(sm.points, pm, _facing_tags(c, mm.facets[msel], mm.facet_tags[msel]), ps, own)
             else:
                 g = c.gaps(sm.points, mm.points)
             # a gap at the round-off of the geometry is a touching contact: exactly zero (a node left a
@@ -874,15 +877,20 @@ def _items(value, types: tuple, message: str) -> list:
     return items
 
 
+def _node_tags(nodes: np.ndarray, facets: np.ndarray, tags: np.ndarray, n: int) -> np.ndarray:
+    """The tag of a facet (of `facets`, tagged `tags`) that holds each of `nodes` (ids < n)."""
+    tag_of_node = np.full(n, tags[0] if len(tags) else 0)
+    for k in range(facets.shape[1]):
+        tag_of_node[facets[:, k]] = tags
+    return tag_of_node[nodes]
+
+
 def _facing_tags(c, facets: np.ndarray, tags: np.ndarray) -> np.ndarray:
     """Per kept nonmortar node of coupling c the tag of a mortar facet it faces: one holding the
     mortar node of its largest weight in M."""
     M = c.M.tocsr()
     top = np.array([M.indices[a + np.argmax(M.data[a:b])] if b > a else -1 for a, b in zip(M.indptr[:-1], M.indptr[1:])])
-    tag_of_node = np.full(M.shape[1], tags[0] if len(tags) else 0)
-    for k in range(facets.shape[1]):
-        tag_of_node[facets[:, k]] = tags
-    return tag_of_node[np.maximum(top, 0)]
+    return _node_tags(np.maximum(top, 0), facets, tags, M.shape[1])
 
 
 def _coupling_notes(couplings) -> List[str]:
