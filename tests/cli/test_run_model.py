@@ -379,9 +379,28 @@ def test_bad_loads_and_regions(tmp_path, capsys, old, new, key, words):
         assert w in line, line
 
 
+@pytest.mark.parametrize("lower", ['levels = 2', 'levels = 1\nhierarchy = "coarsening"'])
+def test_two_blocks_of_unequal_hierarchies_balance(tmp_path, capsys, lower):
+    """The lower body refined once less, or coarsened from its mesh alone, beside the upper body's
+    three levels: the model solves and its statics hold as with equal levels."""
+    d = example("two_blocks", tmp_path)
+    model = d / "blocks.toml"
+    text = model.read_text()
+    old = "levels = 3\nmaterial = { E = 2000.0"
+    assert old in text
+    model.write_text(text.replace(old, lower + "\nmaterial = { E = 2000.0", 1))
+    rc, _, err = run_main(capsys, model, "-q")
+    assert rc == 0, err
+    rep = json.loads((d / "out" / "blocks.json").read_text())
+    assert rep["converged"] and [b["levels"] for b in rep["bodies"]][0] == 3
+    pair = np.asarray(rep["contact_forces"]["pair 0"])
+    forces = {r["body"]: np.asarray(r["force"]) for r in rep["reactions"]}
+    scale = np.abs(pair).max()
+    assert np.abs(forces["upper"] + pair).max() <= 1e-10 * scale
+    assert np.abs(forces["lower"] - pair + np.array([0.0, -0.7])).max() <= 1e-10 * scale
+
+
 @pytest.mark.parametrize("old,new,key,words", [
-    ("levels = 3\nmaterial = { E = 2000.0", "levels = 2\nmaterial = { E = 2000.0", "body[1].levels",
-     ["same levels"]),
     ('mortar = "lower"', 'mortar = "lowr"', "pair[0].mortar", ["did you mean 'lower'"]),
     ("mortar_tags = [3]", "mortar_tags = [5]", "pair[0].mortar_tags", ["lower.msh"]),
     ("search = 0.1", "search = -0.1", "pair[0].search", ["positive"]),

@@ -296,10 +296,6 @@ def read_model(path) -> Model:
     dims = {i.mesh.dim for i in infos}
     if len(dims) != 1:
         raise ModelError(file, "body", f"the bodies' meshes need one dimension, got {sorted(dims)}")
-    for k, info in enumerate(infos[1:], start=1):
-        if info.levels != infos[0].levels:  # the bodies' levels are coupled level by level
-            raise ModelError(file, f"body[{k}].levels", f"several bodies need the same levels: body[0] has "
-                                                        f"{infos[0].levels}, this one {info.levels}")
     friction, friction_info = _read_friction(top.table("friction", ("law", "coefficient", "bound")))
     obstacles = [_read_obstacle(_Table(file, f"obstacle[{k}]", t, ("body", "tags", "type", "point", "normal", "center",
                                                                   "radius", "inside", "axis", "mesh", "body_side",
