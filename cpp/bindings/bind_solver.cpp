@@ -275,6 +275,10 @@ void bind_dim(py::module_& m) {
            "(True, the default: a later solve touches no new pages) or go at the end of each (a solver made for one "
            "solve: the lower peak); returns the previous setting")
       .def_property_readonly("renumbered", &CS::renumbered, "whether the levels are stored by colours")
+      .def("residual", [](const CS& S) { return to_numpy(S.residual(), {(py::ssize_t)S.num_nodes(), d}); },
+           "A u - f of the last iterate (n, d; canonical axes, the caller's numbering): meaningful on the rows "
+           "that are not fixed")
+      .def("stiffness_scale", &CS::stiffness_scale, "The largest entry of the fine matrix.")
       .def("memory_bytes", &CS::memory_bytes)
       .def("enable_tied_correction", &CS::enable_tied_correction,
            "after each nmg coarse correction a second one, without bounds, with every contact dof frozen (two bodies)")

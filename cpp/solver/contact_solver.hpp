@@ -37,6 +37,28 @@ class ContactSolver {
   const GalerkinHierarchy<d>& hierarchy() const { return H_; }
   CoarseCycle<d>& coarse_cycle() { return C_; }
   const BlockMatrix<d>& fine_matrix() const { return P_.matrix(); }  // in storage order
+  // A u - f of the last iterate (n * d: canonical axes, the caller's numbering), from the kept A u:
+  // the final check of a solve reads its free rows (a fixed row holds no equation here: its
+  // component is eliminated). No product with A, and no matrix kept elsewhere for it.
+  std::vector<double> residual() const {
+    const std::vector<double>& f = P_.load();
+    std::vector<double> r(it_.Au.size());
+    for (std::size_t k = 0; k < r.size(); ++k) r[k] = it_.Au[k] - f[k];
+    std::vector<double> out = order_.back().to_storage_inverse(r.data(), num_nodes(), d);
+    const BasisTransform<d>& T = P_.basis();
+    for (Index c = 0; c < T.num_blocks(); ++c) {
+      VecMap<d> ri(out.data() + order_.back().to_user(T.node(c)) * d);
+      ri = T.block(c) * Vec<d>(ri);
+    }
+    return out;
+  }
+  // The largest entry of the fine matrix: the stiffness scale of the final check.
+  double stiffness_scale() const {
+    double m = 0;
+    for (double v : P_.matrix().values) m = std::max(m, std::abs(v));
+    return m;
+  }
+
   // The fine matrix (in the frames, Dirichlet eliminated) and coarse matrix l in the user's numbering.
   BlockMatrix<d> fine_matrix_in_user_order() const { return in_user_order(P_.matrix(), (int)order_.size() - 1); }
   BlockMatrix<d> coarse_matrix_in_user_order(int l) const { return in_user_order(H_.matrix(l), l); }

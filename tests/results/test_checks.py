@@ -122,3 +122,42 @@ def test_a_two_body_load_path_meets_the_conditions_on_every_step():
             previous = path.steps[k - 1].displacement
             assert np.array_equal(r.slip_origin, p.relative_displacement(previous))
         assert r.check(raise_on_violation=True)["max"] <= VIOLATION_TOL
+
+
+def _held_block(levels=4):
+    """A 2 x 1 block with no supports on a rigid floor, traction (0.2, -1) on its top, Coulomb 0.3:
+    held by friction alone (0.2 < 0.3 x 1)."""
+    import contactmg as cm
+    from contactmg.mesh.generators import RECT_BOTTOM, RECT_TOP, rectangle
+
+    h = cm.MeshHierarchy.build(rectangle(4, 2, 2.0, 1.0), levels)
+    body = cm.Body(h, cm.Material(1000.0, 0.3), [], contact_tags=[RECT_BOTTOM], traction={RECT_TOP: (0.2, -1.0)})
+    return cm.Problem(body, obstacle=cm.PlaneObstacle((0.0, 0.0), (0.0, -1.0)), friction=cm.Coulomb(0.3))
+
+
+def test_a_runaway_iterate_cannot_pass_the_check():
+    """Violations are measured against the load's scale, not one the iterate sets: the solution
+    blown up a million times (every reaction and contact force with it) fails by far, where a scale
+    from its own contact forces made it look like round-off."""
+    p = _held_block()
+    r = p.solve("tnnmg")
+    assert r.converged and contact_conditions(p, r)["max"] < VIOLATION_TOL
+    bad = dataclasses.replace(r, displacement=1e6 * r.displacement)
+    bad.problem = p
+    v = contact_conditions(p, bad)
+    assert v["interior"] > 1.0 and v["balance"] > 1e-3
+
+
+@pytest.mark.parametrize("method", ["tnnmg", None])
+def test_converged_is_said_only_after_the_final_check(method):
+    """A body held by friction alone: the solve says "converged" only with its equations solved and
+    its forces balanced (the final check, against the load), whatever stopped the cycles."""
+    p = _held_block(5)
+    r = p.solve(method)
+    if r.converged:
+        v = r.extra["final_check"]
+        assert v["max"] <= r.extra["final_check_tol"] and v["balance"] < 1e-8
+        force = r.contact_forces()["obstacle"]
+        assert np.allclose(force + r.canonical_load().sum(axis=0), 0.0, atol=1e-8 * 2.0)
+    else:
+        assert "not converged" in r.status or "no convergence" in r.status or "diverged" in r.status

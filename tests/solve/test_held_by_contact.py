@@ -83,7 +83,9 @@ def test_a_load_pulling_the_body_off_is_refused_naming_the_motion():
 
 def test_a_load_beyond_friction_is_refused():
     """Pushed sideways by 0.7 against a friction of at most 0.3 x 2: no equilibrium."""
-    with pytest.raises(ValueError, match=r"nothing holds the body in a translation along \[0.9.*beyond what friction holds"):
+    with pytest.raises(ValueError, match=r"nothing holds the body in a translation along \[1.0, 0.0\]: the load drives it "
+                                         r"that way beyond what friction holds: it needs a friction coefficient of about "
+                                         r"0.35\d? where the contacts have 0.3"):
         cm.Problem(cm.Body(_block(2), MAT, [], contact_tags=B, pressure={T: 1.0, L: 0.7}), obstacle=FLOOR,
                    friction=cm.Coulomb(0.3))
     # within the friction it stands
@@ -152,3 +154,29 @@ def test_a_body_of_several_pulled_off_is_refused_by_number():
     bodies[1].pressure = {T: -1.0}
     with pytest.raises(ValueError, match=r"nothing holds body 1 in a translation along \[0.0, 1.0\]"):
         cm.Problem(bodies, contacts=contacts, friction=cm.Coulomb(0.3))
+
+
+@pytest.mark.parametrize("F,held", [(0.26, False), (0.27, True)])
+def test_a_box_on_a_15_degree_slope_slides_below_tan_15_degrees(F, held):
+    """A box under gravity on a plane tilted by 15 degrees, no supports: it stays where F >= tan 15
+    = 0.268 (the friction cone, not a pyramid around it, decides), and below that the refusal names
+    the slide down the slope and the friction it needs."""
+    from contactmg.mesh.generators_3d import box
+
+    a = np.deg2rad(15.0)
+    normal = (np.sin(a), 0.0, -np.cos(a))
+    body = cm.Body(cm.MeshHierarchy.build(box(2, 2, 1, 1.0, 1.0, 0.5), 2), cm.Material(1000.0, 0.3, density=1.0), [],
+                   contact_tags=[5], gravity=(0.0, 0.0, -9.81))
+
+    def make():
+        return cm.Problem(body, obstacle=cm.PlaneObstacle((0.0, 0.0, 0.0), normal), friction=cm.Coulomb(F))
+    if held:
+        res = make().solve()
+        assert res.converged
+        force = res.contact_forces()["obstacle"]
+        weight = res.canonical_load().sum(axis=0)
+        assert np.allclose(force + weight, 0.0, atol=1e-8 * np.abs(weight).max())
+    else:
+        with pytest.raises(ValueError, match=r"translation along \[-0.966, 0.0, -0.259\].*needs a friction coefficient "
+                                             r"of about 0.26[89] where the contacts have 0.26"):
+            make()

@@ -20,7 +20,8 @@ from ..model.frames import to_local
 VIOLATION_TOL = 1e-6
 
 
-def contact_conditions(problem, result, raise_on_violation: bool = False, tol: float = VIOLATION_TOL) -> Dict[str, float]:
+def contact_conditions(problem, result, raise_on_violation: bool = False, tol: float = VIOLATION_TOL,
+                       residual=None, stiffness=None) -> Dict[str, float]:
     """Relative violations of the discrete contact conditions by `result` (a ContactResult of
     `problem`), each >= 0, plus "max", their maximum:
 
@@ -31,10 +32,13 @@ def contact_conditions(problem, result, raise_on_violation: bool = False, tol: f
     - friction_bound: max (|s_T| - s_p) where friction acts (Coulomb: nodes in contact, s_p =
       F_p |s_n|; Tresca: every contact node, the given bound; frictionless: nodes in contact, 0),
     - slip_direction: max |s_T + s_p v_T/|v_T|| over the nodes where friction acts and v_T != 0,
-    all divided by the force scale (the largest contact force, support reaction or load; the
-    stiffness scale max|A| max|w| for a body that carries no force); and penetration: max (w_n - g)
-    divided by the displacement scale of the problem (the largest displacement, prescribed
-    displacement or gap; it does not vanish when every gap and normal displacement is zero). The
+    all divided by the force scale of the problem, which the iterate cannot inflate (the largest nodal
+    load, or the largest contact force or reaction up to max|A| times the largest prescribed
+    displacement or initial penetration; max|A| max|w| for a body nothing loads); balance: per body the largest component of
+    the residual summed over its free dofs off the contact boundary (what reactions, contact forces
+    and load fail to balance) divided by the load's total (the sum of |f|, at least the force scale); and
+    penetration: max (w_n - g) divided by the displacement scale of the problem (the largest
+    prescribed displacement or gap, or the force scale over max|A|). The
     contact state is recomputed from w (w_n >= g in contact, v_T == 0 sticking, both up to
     round-off), not taken from the result; the frames are the result's (result.contact_frames).
 
@@ -50,12 +54,14 @@ def contact_conditions(problem, result, raise_on_violation: bool = False, tol: f
     - the load and the prescribed displacements of the solve (result.load, result.fixed_values:
       a load path step's own), else the problem's.
 
-    With raise_on_violation, a ValueError names every condition violated by more than `tol`."""
+    With raise_on_violation, a ValueError names every condition violated by more than `tol`.
+    `residual` (A w - f of the result, as a core solver gives it) and `stiffness` (the largest entry
+    of A) spare a product with the problem's matrix, which one body's solver has taken over."""
     c = problem.contact
     w = problem.relative_displacement(np.asarray(result.displacement, dtype=float))
     load = problem.load if getattr(result, "load", None) is None else result.load
     fixed_values = problem.fixed_values if getattr(result, "fixed_values", None) is None else result.fixed_values
-    r = problem.A.matvec(w) - load
+    r = problem.A.matvec(w) - load if residual is None else np.asarray(residual, dtype=float)
     origin = getattr(result, "slip_origin", None)
     slip = w if origin is None else w - origin
     Q = result.contact_frames
@@ -67,19 +73,36 @@ def contact_conditions(problem, result, raise_on_violation: bool = False, tol: f
         tied = getattr(result, "frame_fixed", None)
         tied = (problem.solver.core.frame_fixed if tied is None else tied).astype(bool)
         ul[tied], vl[tied], sl[tied] = 0.0, 0.0, 0.0
-    # Forces are measured against the force scale of the problem: the largest contact force, support
-    # reaction or load. A body that carries no force at all (pushed onto nothing, it only translates)
-    # has none; there the stiffness scale max|A| max|w| measures what round-off is.
+    # Forces are measured against the force scale of the problem, which the iterate cannot inflate:
+    # the largest nodal load, and the iterate's largest contact force or reaction only up to the
+    # stiffness times the largest prescribed displacement or initial penetration (the most a
+    # displacement-driven body's supports or an interference fit call for). A scale
+    # from the iterate's own reactions or contact forces grows with a runaway iterate and made its
+    # violations look like round-off (|u| = 2e8, every violation below 1e-13).
     fixed = problem.fixed.astype(bool)
-    scale = max(float(np.abs(sl[:, 0]).max(initial=0.0)), float(np.abs(r[fixed]).max(initial=0.0)),
-                float(np.abs(load).max(initial=0.0)))
-    stiffness = float(np.abs(problem.A.data).max(initial=0.0)) * float(np.abs(w).max(initial=0.0))
-    if scale <= 1e-9 * stiffness:
-        scale = stiffness
-    scale = max(scale, 1e-300)
+    prescribed = np.where(fixed, fixed_values, 0.0)
+    if stiffness is None:
+        stiffness = float(np.abs(problem.A.data).max(initial=0.0))
+    overlap = float(np.maximum(-np.asarray(c.gaps, float), 0.0).max(initial=0.0))
+    moved = stiffness * max(float(np.abs(prescribed).max(initial=0.0)), overlap)
+    # the iterate's own reactions and contact forces count up to that bound, no further
+    own = max(float(np.abs(sl[:, 0]).max(initial=0.0)), float(np.abs(r[fixed]).max(initial=0.0)))
+    scale = max(float(np.abs(load).max(initial=0.0)), min(own, moved))
+    force_sum = max(float(np.abs(load).sum()), scale)
+    if scale == 0.0:
+        # nothing loads the body: its solution is zero, and the stiffness times the iterate is what
+        # round-off means
+        scale = force_sum = stiffness * float(np.abs(w).max(initial=0.0))
+    scale, force_sum = max(scale, 1e-300), max(force_sum, 1e-300)
     free = ~fixed
     free[c.nodes] = False
     out = {"interior": float(np.abs(r[free]).max(initial=0.0)) / scale}
+    # equilibrium of each body: the residual left at its free dofs off the contact boundary, summed
+    # (what the reactions, contact forces and load fail to balance), against the load's total
+    body = getattr(problem, "body_id", np.zeros(len(w), np.int32))
+    sums = np.zeros((int(body.max(initial=0)) + 1, w.shape[1]))
+    np.add.at(sums, body, np.where(free, r, 0.0))
+    out["balance"] = float(np.abs(sums).max(initial=0.0)) / force_sum
     # The core's tests w_n == g and v_T == 0 are exact in its frames; rebuilt here from the canonical
     # u through a rotated frame (and T^{-1}) they carry round-off, hence the relative tolerance.
     eps = 1e-12 * max(float(np.abs(w).max(initial=0.0)), float(np.abs(c.gaps).max(initial=0.0)), 1e-300)
@@ -107,10 +130,11 @@ def contact_conditions(problem, result, raise_on_violation: bool = False, tol: f
         out["slip_direction"] = float(np.linalg.norm(dev, axis=1).max()) / scale
     else:
         out["slip_direction"] = 0.0
-    # Not max |w_n|: on a tilted plane with zero gaps every w_n is round-off. The displacement scale
-    # of a loaded body is positive: it moves, or is held by prescribed displacements, or its gaps are.
-    disp = max(float(np.abs(w).max(initial=0.0)), float(np.abs(fixed_values).max(initial=0.0)),
-               float(np.abs(c.gaps).max(initial=0.0)), 1e-300)
+    # Not max |w_n|: on a tilted plane with zero gaps every w_n is round-off; nor max |w|, which a
+    # runaway iterate sets. The displacement scale of the problem: its prescribed displacements, its
+    # gaps, and the displacement its force scale makes at the stiffest entry of A.
+    disp = max(float(np.abs(prescribed).max(initial=0.0)), float(np.abs(c.gaps).max(initial=0.0)),
+               scale / max(stiffness, 1e-300), 1e-300)
     out["penetration"] = max(0.0, float((ul[:, 0] - c.gaps).max(initial=0.0))) / disp
     out["max"] = max(out.values())
     if raise_on_violation:

@@ -25,6 +25,29 @@ def memory_report(problem: Problem, core=None) -> dict:
     return out
 
 
+# The final check of a converged solve: its tolerance is FINAL_CHECK_FACTOR times the stop's
+# relative level (at least VIOLATION_TOL), and a solve that fails it goes on from its iterate at most
+# this many times while cycles are left.
+FINAL_CHECK_FACTOR = 1e4
+FINAL_CHECK_RESTARTS = 2
+
+
+def _joined(first: dict, then: dict) -> dict:
+    """The raw result of a solve that went on from `first` with `then`: then's iterate and figures,
+    the cycles and history of both."""
+    out = dict(then)
+    out["cycles"] = int(first["cycles"]) + int(then["cycles"])
+    hist = {}
+    for k, v in then["history"].items():
+        a = np.asarray(first["history"].get(k, []))
+        b = np.asarray(v)
+        if k == "cycle":
+            b = b + int(first["cycles"])
+        hist[k] = np.concatenate([a, b]) if a.shape[1:] == b.shape[1:] else b
+    out["history"] = hist
+    return out
+
+
 class Solver:
     """The core solver of `problem` (a Problem) with `options` (a SolverOptions, a dict of its
     fields, or None: the defaults), built once here. Options fixed at the build (ordering,
@@ -148,7 +171,49 @@ class Solver:
             reference = self.solve(None, options=opts.replace(method="nmg"))
             return self.solve_known_state(reference, opts, progress=progress, error_reference=error_reference)
         raw = self.core.solve(u0, opts.to_core(), progress=progress, reference=error_reference)
-        return self._result(raw, opts, self.build_seconds)
+        res = self._result(raw, opts, self.build_seconds)
+        # "converged" only after the final check: a cycle's stop measures the step, which a nearly
+        # free motion (a body held by contact) or a stalled iterate can make small while the
+        # equations are not solved. Cycles left go on from the iterate; then the verdict.
+        for _ in range(FINAL_CHECK_RESTARTS):
+            if not res.converged or self._passes_final_check(res, opts):
+                break
+            left = opts.max_cycles - res.cycles
+            if left <= 0:
+                break
+            more = self.core.solve(raw["u"], opts.replace(max_cycles=left).to_core(), progress=progress,
+                                   reference=error_reference)
+            raw = _joined(raw, more)
+            res = self._result(raw, opts, self.build_seconds)
+        if res.converged and not self._passes_final_check(res, opts):
+            res.converged = False
+            v = res.extra["final_check"]
+            worst = max((k for k in v if k != "max"), key=v.get)
+            res.status = (f"not converged: the cycles' stop was met, but the final check finds {worst} {v[worst]:.3g} "
+                          f"(relative to the problem's force and displacement scales; tolerance "
+                          f"{res.extra['final_check_tol']:.3g})")
+        return res
+
+    def _passes_final_check(self, res: ContactResult, opts: SolverOptions) -> bool:
+        """contact_conditions of `res` from the core's residual (no product with a matrix the core has
+        taken over), against a tolerance that follows the stop asked for: VIOLATION_TOL at the
+        default stop, looser for a looser one. The figures go to res.extra["final_check"]."""
+        from ..results.checks import VIOLATION_TOL, contact_conditions
+
+        v = contact_conditions(self.problem, res, residual=np.asarray(self.core.residual()),
+                               stiffness=float(self.core.stiffness_scale()))
+        if self.options.release_hierarchy:
+            self.problem.release_vectors()  # the check made the load and the Dirichlet values again
+        tol_abs, rtol = opts.stop
+        h = res.history
+        if len(h.get("correction_norm", ())):
+            size = max(float(h["correction_norm"][0]), float(h["solution_norm"][-1]), 1e-300)
+            level = max(rtol, tol_abs / size)
+        else:
+            level = rtol
+        tol = max(VIOLATION_TOL, FINAL_CHECK_FACTOR * level)
+        res.extra["final_check"], res.extra["final_check_tol"] = v, tol
+        return v["max"] <= tol
 
     def _options_for(self, options) -> SolverOptions:
         if options is None:
