@@ -26,7 +26,7 @@ from contactmg.solve.loadpath import LoadPath
 MODELS = Path(__file__).resolve().parents[2] / "examples" / "models"
 KEYS = ["command", "model", "dim", "cell", "bodies", "levels", "multigrid_levels", "notes", "nodes", "dofs", "method", "law", "friction", "tol",
         "converged", "status", "cycles", "cycles_per_step", "steps", "path", "setup_seconds", "solve_seconds",
-        "seconds", "contact_nodes", "stick_nodes", "slip_nodes", "contact_forces", "reactions", "load",
+        "seconds", "contact_nodes", "stick_nodes", "slip_nodes", "contact_forces", "reactions", "spring_forces", "load",
         "max_von_mises", "check", "check_max", "peak_rss_mb", "outputs"]
 
 
@@ -344,6 +344,9 @@ def test_pressure_gravity_point_load_springs_and_regions(tmp_path, capsys):
     assert np.abs(balance).max() <= 1e-10 * np.abs(load).max()
     assert contact[0] == pytest.approx(0.0, abs=1e-12 * contact[1]) and contact[1] > 0
     assert abs(spring[1]) > 1e-6  # the spring does carry load
+    (reported,) = rep["spring_forces"]
+    assert reported["body"] == "slab" and reported["tags"] == [2]
+    assert reported["force"] == pytest.approx(spring, rel=1e-10, abs=1e-12)
 
     from contactmg.model.loads import PointLoad
     mesh = read_mesh(tmp_path / "slab.msh")
@@ -353,6 +356,23 @@ def test_pressure_gravity_point_load_springs_and_regions(tmp_path, capsys):
     res = Problem(body, obstacle=PlaneObstacle((0.0, 0.0), (0.0, -1.0))).solve("nmg")
     assert res.cycles == rep["cycles"]
     assert np.abs(u - res.displacement).max() <= 1e-14
+
+
+def test_the_report_and_summary_give_the_spring_forces_and_the_statics_close(tmp_path, capsys):
+    """The report's forces alone (contact, reactions, springs) balance the load, as the guide says;
+    the summary table lists the spring's force too."""
+    slab_mesh(tmp_path)
+    (tmp_path / "slab.toml").write_text(LOADED + "summary = true\n")
+    rc, out, err = run_main(capsys, tmp_path / "slab.toml")
+    assert rc == 0, err
+    rep = json.loads((tmp_path / "slab.json").read_text())
+    load = np.asarray(rep["load"])
+    springs = [np.asarray(s["force"]) for s in rep["spring_forces"]]
+    assert len(springs) == 1 and abs(springs[0][1]) > 1e-6 * abs(load[1])
+    forces = list(rep["contact_forces"].values()) + [r["force"] for r in rep["reactions"]] + springs
+    assert np.abs(total(forces) + load).max() <= 1e-10 * np.abs(load).max()
+    row = next(line for line in out.splitlines() if line.startswith("spring force 2"))
+    assert float(row.split("(")[1].split(",")[1].rstrip(")")) == pytest.approx(springs[0][1], rel=1e-5)
 
 
 @pytest.mark.parametrize("old,new,key,words", [

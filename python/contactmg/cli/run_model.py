@@ -55,6 +55,11 @@ def model_report(model: Model, results, seconds: float) -> dict:
         body, tags = key if p.multibody else (0, key)
         reactions.append({"body": names[body], "tags": list(tags) if isinstance(tags, tuple) else [tags],
                           "force": _vec(force)})
+    # the elastic supports carry load too: without them the forces of the report do not balance the load
+    spring_forces = []
+    for key, force in res.spring_forces().items():
+        body, tag = key if p.multibody else (0, key)
+        spring_forces.append({"body": names[body], "tags": [int(tag)], "force": _vec(force)})
     contact_forces = {k: _vec(v) for k, v in res.contact_forces().items()}
     check = {k: float(v) for k, v in res.check().items()}
     converged = len(results) == model.steps and all(r.converged for r in results)
@@ -83,7 +88,7 @@ def model_report(model: Model, results, seconds: float) -> dict:
         "seconds": seconds,
         "contact_nodes": c["contact_nodes"], "stick_nodes": c["stick_nodes"], "slip_nodes": c["slip_nodes"],
         "contact_extent": float(res.contact_extent),
-        "contact_forces": contact_forces, "reactions": reactions,
+        "contact_forces": contact_forces, "reactions": reactions, "spring_forces": spring_forces,
         "load": _vec(res.canonical_load().sum(axis=0)),
         "max_normal_stress": float(abs(sn).max()) if len(sn) else 0.0,
         "max_von_mises": float(res.von_mises().max(initial=0.0)),

@@ -362,7 +362,8 @@ class ContactResult:
     def summary(self) -> str:
         """A plain-text table of the solve: method, law, status, cycles, dofs, solve seconds, the
         contact/stick/slip node counts, the contact extent, and with the problem known the total
-        contact force, the reactions per Dirichlet tag, the largest von Mises stress and the
+        contact force, the reactions per Dirichlet tag, the elastic supports' forces per tag (with
+        the reactions and contact forces they balance the load), the largest von Mises stress and the
         largest violation of the contact conditions (check())."""
         after = self.extra.get("switched_to_tnnmg_after")
         method = self.method if after is None else f"{self.method}, then tnnmg after cycle {after}"
@@ -375,6 +376,7 @@ class ContactResult:
             vec = lambda v: "(" + ", ".join(f"{x:.6g}" for x in np.asarray(v)) + ")"
             rows += [(f"contact force {k}", vec(v)) for k, v in self.contact_forces().items()]
             rows += [(f"reaction {k}", vec(v)) for k, v in self.reactions().items()]
+            rows += [(f"spring force {k}", vec(v)) for k, v in self.spring_forces().items()]
             rows.append(("max von Mises", f"{float(self.von_mises().max(initial=0.0)):.6g}"))
             check = self.check()
             worst = max((k for k in check if k != "max"), key=lambda k: check[k])
