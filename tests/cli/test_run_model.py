@@ -144,6 +144,8 @@ def test_two_blocks_mortar_pair_balances(tmp_path, capsys):
     assert res.cycles == rep["cycles"]
     vtu = meshio.read(d / "out" / "blocks.vtu")
     assert np.abs(vtu.point_data["displacement"][:, :2] - res.displacement).max() <= 1e-14
+    # the bodies told apart in the VTU, as Problem.write_vtu does: 0 on the upper body's nodes, then 1
+    assert np.array_equal(vtu.point_data["body_id"], np.repeat([0, 1], [b["nodes"] for b in rep["bodies"]]))
 
 
 def test_no_convergence_exits_3_with_the_json_written(tmp_path, capsys):

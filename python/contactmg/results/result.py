@@ -322,7 +322,8 @@ class ContactResult:
         contact nodes); tangential_traction (tangential force / measure, global x, y(, z));
         slip (see slip(), global); normal_stress and tangential_stress (the contact tractions in
         the nodal contact frame [n] and [t(, s)], normal negative in compression); with the
-        problem known, von_mises (of the recovered nodal stress)."""
+        problem known, von_mises (of the recovered nodal stress); for several bodies body_id (the
+        body of each node, to tell the bodies apart in a viewer)."""
         n, d = self.mesh.num_points, self.mesh.dim
         sn = np.zeros(n)
         st = np.zeros((n, d - 1))
@@ -336,6 +337,12 @@ class ContactResult:
                "contact_pressure": -sn, "tangential_traction": tt, "slip": self.slip()}
         if self.problem is not None:
             out["von_mises"] = self.von_mises("nodes")
+        # here rather than in Problem.write_vtu alone, so that every writer of a result (write_vtu,
+        # the load path's series, the command line's outputs) has it
+        body_id = self.problem.body_id if self.problem is not None and self.problem.multibody \
+            else self.extra.get("body_id")
+        if body_id is not None:
+            out["body_id"] = np.asarray(body_id, dtype=np.int32)
         return out
 
     def cell_data(self) -> Dict[str, np.ndarray]:
