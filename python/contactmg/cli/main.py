@@ -6,7 +6,7 @@ import os
 import sys
 from typing import List, Optional
 
-from .common import (EXIT_BAD_INPUT, EXIT_NO_CONVERGENCE, EXIT_OK, MAX_LEVELS, PLOT_SUFFIXES, _Parser, _emit_json, _nonneg_float, _positive_int, _with_suffix, _writable, add_path_arguments, add_report_options, add_stop_options, add_thread_options, hertz_report, release_after_build, stop_fields, use_ordering, write_boundary_stress_plot)
+from .common import (EXIT_BAD_INPUT, EXIT_NO_CONVERGENCE, EXIT_OK, MAX_LEVELS, PLOT_SUFFIXES, _Parser, _emit_json, _nonneg_float, _positive_int, _with_suffix, _writable, add_path_arguments, add_report_options, add_stop_options, add_thread_options, hertz_report, make_output_folders, release_after_build, stop_fields, use_ordering, write_boundary_stress_plot)
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -115,6 +115,7 @@ def main(argv: Optional[List[str]] = None) -> int:
     if distributed.wanted():
         return distributed.run(args) if args.command in ("hertz", "sphere") else distributed.refuse(args)
     try:
+        make_output_folders(args)
         if args.command == "hertz":
             return run_hertz(args)
         if args.command == "cylinders":
