@@ -148,6 +148,29 @@ def test_two_blocks_mortar_pair_balances(tmp_path, capsys):
     assert np.array_equal(vtu.point_data["body_id"], np.repeat([0, 1], [b["nodes"] for b in rep["bodies"]]))
 
 
+def test_a_warning_prints_as_one_line_without_the_python_source(tmp_path):
+    """The obstacle placed 0.2 into the block: the warning about it is one line of the command's own,
+    with neither the file and line of the library nor its source line."""
+    d = example("block_2d", tmp_path)
+    model = d / "block.toml"
+    text = model.read_text().replace("point = [0.0, 0.0]", "point = [0.0, 0.2]").replace("count = 5", "count = 1")
+    model.write_text(text.replace("levels = 4", "levels = 2"))
+    r = subprocess.run([sys.executable, "-m", "contactmg", "run", str(model), "-q"], capture_output=True, text=True,
+                       timeout=300)
+    assert r.returncode == 0, r.stderr
+    lines = r.stderr.splitlines()
+    assert len(lines) == 1 and lines[0].startswith("contactmg: warning: 9 node(s) of the facets tagged [1] start "
+                                                   "inside the obstacle"), r.stderr
+    assert ".py" not in r.stderr and "UserWarning" not in r.stderr
+
+
+def test_the_command_leaves_the_warning_format_of_its_caller():
+    import warnings
+    before = warnings.showwarning
+    main(["run", "/no/such/model.toml"])
+    assert warnings.showwarning is before
+
+
 def test_no_convergence_exits_3_with_the_json_written(tmp_path, capsys):
     d = example("block_2d", tmp_path)
     model = d / "block.toml"
