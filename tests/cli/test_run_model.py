@@ -26,7 +26,7 @@ from contactmg.solve.loadpath import LoadPath
 MODELS = Path(__file__).resolve().parents[2] / "examples" / "models"
 KEYS = ["command", "model", "dim", "cell", "bodies", "levels", "multigrid_levels", "notes", "nodes", "dofs", "method", "law", "friction", "tol",
         "converged", "status", "cycles", "cycles_per_step", "steps", "path", "setup_seconds", "solve_seconds",
-        "seconds", "contact_nodes", "stick_nodes", "slip_nodes", "contact_forces", "reactions", "spring_forces", "load",
+        "read_seconds", "seconds", "contact_nodes", "stick_nodes", "slip_nodes", "contact_forces", "reactions", "spring_forces", "load",
         "max_von_mises", "check", "check_max", "peak_rss_mb", "outputs"]
 
 
@@ -146,6 +146,18 @@ def test_two_blocks_mortar_pair_balances(tmp_path, capsys):
     assert np.abs(vtu.point_data["displacement"][:, :2] - res.displacement).max() <= 1e-14
     # the bodies told apart in the VTU, as Problem.write_vtu does: 0 on the upper body's nodes, then 1
     assert np.array_equal(vtu.point_data["body_id"], np.repeat([0, 1], [b["nodes"] for b in rep["bodies"]]))
+
+
+def test_seconds_is_the_whole_command_with_the_reading(tmp_path, capsys):
+    """`seconds` holds the reading of the model and its meshes, the set-up (hierarchies, assembly,
+    the core's build) and the solve, which do not overlap; `path.seconds` stays the solve's."""
+    d = example("block_2d", tmp_path)
+    rc, _, err = run_main(capsys, d / "block.toml", "-q")
+    assert rc == 0, err
+    rep = json.loads((d / "out" / "block.json").read_text())
+    assert rep["read_seconds"] > 0 and rep["setup_seconds"] > 0 and rep["solve_seconds"] > 0
+    assert rep["seconds"] >= rep["read_seconds"] + rep["setup_seconds"] + rep["solve_seconds"]
+    assert rep["seconds"] > rep["path"]["seconds"] >= rep["solve_seconds"]
 
 
 def test_a_warning_prints_as_one_line_without_the_python_source(tmp_path):
