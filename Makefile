@@ -5,6 +5,12 @@ OUT ?= out
 LEVELS ?= 7
 FRICTION ?= 0.4
 PIP = $(PYTHON) -m pip install --disable-pip-version-check -q
+# The editable installs compile incrementally in build/ in a folder of their own Python environment
+# (a hash of its sys.prefix): two environments installing from this checkout at once never share
+# CMake's cache and objects (the wheel tag alone is the same for two venvs of one Python). A plain
+# pip install or pip wheel builds in a temporary folder (pyproject.toml sets no build-dir).
+ENV_ID := $(shell $(PYTHON) -c "import hashlib, sys; print(hashlib.sha1(sys.prefix.encode()).hexdigest()[:12])" 2>/dev/null || echo default)
+BUILD_DIR = build/editable-$(ENV_ID)
 
 .PHONY: setup demo test test-all benchmark sanitize clean docs
 
@@ -14,7 +20,7 @@ setup:
 	  if [ "$$(id -u)" = 0 ]; then apt-get update -qq && apt-get install -y -qq libeigen3-dev; \
 	  else sudo apt-get update -qq && sudo apt-get install -y -qq libeigen3-dev; fi; fi
 	$(PIP) "scikit-build-core>=0.10" "pybind11>=2.12" numpy
-	$(PIP) --no-build-isolation -e ".[test,docs,mpi]"
+	$(PIP) --no-build-isolation -Cbuild-dir=$(BUILD_DIR) -e ".[test,docs,mpi]"
 
 # table1: the paper's adaptive hierarchy, levels 3 5 7 9 11 (464,670 dofs), both algorithms for the ten
 # coefficients in two processes; exit status 3 (runs that did not converge, reported) does not stop the demo.
@@ -46,10 +52,10 @@ benchmark: setup
 sanitize:
 	$(PIP) "scikit-build-core>=0.10" "pybind11>=2.12" numpy
 	CMAKE_ARGS="-DCONTACTMG_SANITIZE=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo" $(PIP) --no-build-isolation \
-	  -Cbuild-dir=build/sanitize -e ".[test]"
+	  -Cbuild-dir=build/sanitize-$(ENV_ID) -e ".[test]"
 	ASAN_OPTIONS=detect_leaks=0 LD_PRELOAD="$$(gcc -print-file-name=libasan.so) $$(gcc -print-file-name=libubsan.so)" \
 	  UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 $(PYTHON) -m pytest -q -x tests -k "not notebook"
-	$(PIP) --no-build-isolation -e ".[test]"
+	$(PIP) --no-build-isolation -Cbuild-dir=$(BUILD_DIR) -e ".[test]"
 
 clean:
 	rm -rf build site $(OUT)

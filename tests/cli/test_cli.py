@@ -22,9 +22,10 @@ def run(*args, timeout=120, cwd=None):
 
 @pytest.mark.parametrize("args,word", [
     (["--levels", "0"], "levels"), (["--frictions", "-0.4"], "frictions"), (["--frictions", "inf"], "frictions"),
-    (["--cell", "hexagon"], "cell"), (["--plot", "t.bmp"], "--plot"), (["--json", "/nonexistent/t.json"], "/nonexistent"),
+    (["--cell", "hexagon"], "cell"), (["--plot", "t.bmp"], "--plot"), (["--json", "a_file/t.json"], "a_file"),
 ])
 def test_table1_bad_arguments_exit_2(args, word, tmp_path):
+    (tmp_path / "a_file").write_text("")  # a folder of an output path that is a file
     r = run("table1", *args, cwd=tmp_path)
     assert r.returncode == 2 and "Traceback" not in r.stderr
     assert word in r.stderr.strip().splitlines()[-1]
@@ -63,16 +64,31 @@ def test_hertz_outputs_and_no_convergence_status(tmp_path):
     assert vtu.stat().st_size > 1000 and png.read_bytes()[:4] == b"\x89PNG"
 
 
+def test_output_paths_in_missing_folders_are_made(tmp_path):
+    """--json, --vtu and --plot into folders that do not exist yet: the folders are made."""
+    js, vtu, png = tmp_path / "out" / "h.json", tmp_path / "out" / "deeper" / "h.vtu", tmp_path / "pics" / "h.png"
+    r = run("hertz", "--levels", "3", "--json", str(js), "--vtu", str(vtu), "--plot", str(png), "-q")
+    assert r.returncode == 0, r.stderr
+    assert json.loads(js.read_text())["levels"] == 3
+    assert vtu.stat().st_size > 1000 and png.read_bytes()[:4] == b"\x89PNG"
+
+
+def test_a_refused_command_line_makes_no_output_folder(tmp_path):
+    r = run("hertz", "--levels", "0", "--json", "out/h.json", cwd=tmp_path)
+    assert r.returncode == 2 and not (tmp_path / "out").exists()
+
+
 @pytest.mark.parametrize("args,word", [
     (["--friction", "-1"], "friction"), (["--friction", "nan"], "friction"), (["--tol", "0"], "tol"),
     (["--tol", "nan"], "tol"), (["--levels", "0"], "levels"), (["--levels", "50"], "levels"),
     (["--cell", "hexagon"], "cell"), (["--method", "newton"], "method"), (["--max-cycles", "0"], "max-cycles"),
-    (["--json", "/nonexistent/dir/x.json"], "/nonexistent"), (["--levels", "x"], "levels"),
+    (["--json", "a_file/dir/x.json"], "a_file"), (["--levels", "x"], "levels"),
     (["--tol", "-1e-9"], "tol"), (["--vtu", "out.txt"], "--vtu"), (["--plot", "out.jpg"], "--plot"),
     (["--nu1", "-1"], "nu1"), (["--cycle", "Z"], "cycle"),
     (["--levels", "14"], "levels"),
 ])
 def test_bad_arguments_exit_2_with_a_message(args, word, tmp_path):
+    (tmp_path / "a_file").write_text("")  # a folder of an output path that is a file
     r = run("hertz", *args, cwd=tmp_path)
     assert r.returncode == 2
     assert "Traceback" not in r.stderr

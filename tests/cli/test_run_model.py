@@ -26,7 +26,7 @@ from contactmg.solve.loadpath import LoadPath
 MODELS = Path(__file__).resolve().parents[2] / "examples" / "models"
 KEYS = ["command", "model", "dim", "cell", "bodies", "levels", "multigrid_levels", "notes", "nodes", "dofs", "method", "law", "friction", "tol",
         "converged", "status", "cycles", "cycles_per_step", "steps", "path", "setup_seconds", "solve_seconds",
-        "seconds", "contact_nodes", "stick_nodes", "slip_nodes", "contact_forces", "reactions", "load",
+        "read_seconds", "seconds", "contact_nodes", "stick_nodes", "slip_nodes", "contact_forces", "reactions", "spring_forces", "load",
         "max_von_mises", "check", "check_max", "peak_rss_mb", "outputs"]
 
 
@@ -144,6 +144,43 @@ def test_two_blocks_mortar_pair_balances(tmp_path, capsys):
     assert res.cycles == rep["cycles"]
     vtu = meshio.read(d / "out" / "blocks.vtu")
     assert np.abs(vtu.point_data["displacement"][:, :2] - res.displacement).max() <= 1e-14
+    # the bodies told apart in the VTU, as Problem.write_vtu does: 0 on the upper body's nodes, then 1
+    assert np.array_equal(vtu.point_data["body_id"], np.repeat([0, 1], [b["nodes"] for b in rep["bodies"]]))
+
+
+def test_seconds_is_the_whole_command_with_the_reading(tmp_path, capsys):
+    """`seconds` holds the reading of the model and its meshes, the set-up (hierarchies, assembly,
+    the core's build) and the solve, which do not overlap; `path.seconds` stays the solve's."""
+    d = example("block_2d", tmp_path)
+    rc, _, err = run_main(capsys, d / "block.toml", "-q")
+    assert rc == 0, err
+    rep = json.loads((d / "out" / "block.json").read_text())
+    assert rep["read_seconds"] > 0 and rep["setup_seconds"] > 0 and rep["solve_seconds"] > 0
+    assert rep["seconds"] >= rep["read_seconds"] + rep["setup_seconds"] + rep["solve_seconds"]
+    assert rep["seconds"] > rep["path"]["seconds"] >= rep["solve_seconds"]
+
+
+def test_a_warning_prints_as_one_line_without_the_python_source(tmp_path):
+    """The obstacle placed 0.2 into the block: the warning about it is one line of the command's own,
+    with neither the file and line of the library nor its source line."""
+    d = example("block_2d", tmp_path)
+    model = d / "block.toml"
+    text = model.read_text().replace("point = [0.0, 0.0]", "point = [0.0, 0.2]").replace("count = 5", "count = 1")
+    model.write_text(text.replace("levels = 4", "levels = 2"))
+    r = subprocess.run([sys.executable, "-m", "contactmg", "run", str(model), "-q"], capture_output=True, text=True,
+                       timeout=300)
+    assert r.returncode == 0, r.stderr
+    lines = r.stderr.splitlines()
+    assert len(lines) == 1 and lines[0].startswith("contactmg: warning: 9 node(s) of the facets tagged [1] start "
+                                                   "inside the obstacle"), r.stderr
+    assert ".py" not in r.stderr and "UserWarning" not in r.stderr
+
+
+def test_the_command_leaves_the_warning_format_of_its_caller():
+    import warnings
+    before = warnings.showwarning
+    main(["run", "/no/such/model.toml"])
+    assert warnings.showwarning is before
 
 
 def test_no_convergence_exits_3_with_the_json_written(tmp_path, capsys):
@@ -344,6 +381,9 @@ def test_pressure_gravity_point_load_springs_and_regions(tmp_path, capsys):
     assert np.abs(balance).max() <= 1e-10 * np.abs(load).max()
     assert contact[0] == pytest.approx(0.0, abs=1e-12 * contact[1]) and contact[1] > 0
     assert abs(spring[1]) > 1e-6  # the spring does carry load
+    (reported,) = rep["spring_forces"]
+    assert reported["body"] == "slab" and reported["tags"] == [2]
+    assert reported["force"] == pytest.approx(spring, rel=1e-10, abs=1e-12)
 
     from contactmg.model.loads import PointLoad
     mesh = read_mesh(tmp_path / "slab.msh")
@@ -353,6 +393,23 @@ def test_pressure_gravity_point_load_springs_and_regions(tmp_path, capsys):
     res = Problem(body, obstacle=PlaneObstacle((0.0, 0.0), (0.0, -1.0))).solve("nmg")
     assert res.cycles == rep["cycles"]
     assert np.abs(u - res.displacement).max() <= 1e-14
+
+
+def test_the_report_and_summary_give_the_spring_forces_and_the_statics_close(tmp_path, capsys):
+    """The report's forces alone (contact, reactions, springs) balance the load, as the guide says;
+    the summary table lists the spring's force too."""
+    slab_mesh(tmp_path)
+    (tmp_path / "slab.toml").write_text(LOADED + "summary = true\n")
+    rc, out, err = run_main(capsys, tmp_path / "slab.toml")
+    assert rc == 0, err
+    rep = json.loads((tmp_path / "slab.json").read_text())
+    load = np.asarray(rep["load"])
+    springs = [np.asarray(s["force"]) for s in rep["spring_forces"]]
+    assert len(springs) == 1 and abs(springs[0][1]) > 1e-6 * abs(load[1])
+    forces = list(rep["contact_forces"].values()) + [r["force"] for r in rep["reactions"]] + springs
+    assert np.abs(total(forces) + load).max() <= 1e-10 * np.abs(load).max()
+    row = next(line for line in out.splitlines() if line.startswith("spring force 2"))
+    assert float(row.split("(")[1].split(",")[1].rstrip(")")) == pytest.approx(springs[0][1], rel=1e-5)
 
 
 @pytest.mark.parametrize("old,new,key,words", [

@@ -139,3 +139,15 @@ def test_point_load_acts_at_its_node_and_is_balanced():
     with pytest.raises(ValueError, match="no mesh node at"):
         cm.Problem(cm.Body(h, cm.Material(10.0, 0.3), [cm.Dirichlet(BOTTOM, (0.0, 0.0))],
                            point_loads=[PointLoad((0.123, 1.0), f)]))
+
+
+def test_point_loads_none_means_no_point_loads():
+    # None is accepted as for every other optional load, and gives the same problem as no point loads
+    h = cm.MeshHierarchy.build(cm.rectangle(2, 2, cell="quad"), 2)
+    bc = [cm.Dirichlet(BOTTOM, (0.0, 0.0))]
+    body = cm.Body(h, cm.Material(10.0, 0.3), bc, pressure={TOP: 1.0}, point_loads=None)
+    assert body.point_loads == []
+    ref = cm.Problem(cm.Body(h, cm.Material(10.0, 0.3), bc, pressure={TOP: 1.0}))
+    assert np.array_equal(cm.Problem(body).load, ref.load)
+    with pytest.raises(TypeError, match="point_loads must be"):
+        cm.Body(h, cm.Material(10.0, 0.3), bc, point_loads=3.0)

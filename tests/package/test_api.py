@@ -133,3 +133,38 @@ def test_progress_is_called_after_every_cycle(problem):
 def test_progress_must_be_callable(problem):
     with pytest.raises(ValueError, match="progress must be a callable"):
         problem.solve(progress="print")
+
+
+def test_the_moved_modules_import_with_a_deprecation_warning():
+    """contactmg.checks, contactmg.loadpath and contactmg.two_body (moved into the layers) still
+    import, warn once that they are deprecated, and hold the very objects of their new places. In a
+    fresh interpreter: a module imported before does not run (nor warn) again."""
+    import subprocess
+    import sys
+
+    code = """
+import warnings
+warnings.simplefilter("always")
+old = {"checks": ["VIOLATION_TOL", "contact_conditions"],
+       "loadpath": ["PATH_METHODS", "LoadPath", "PathResult", "StepData", "two_phase_path"],
+       "two_body": ["Body", "ContactPair", "MultiBodyProblem", "TwoBodyProblem"]}
+new = {"checks": "contactmg.results.checks", "loadpath": "contactmg.solve.loadpath",
+       "two_body": "contactmg.model.problem contactmg.solve.contact_problem"}
+import contactmg, importlib
+for name, names in old.items():
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        mod = importlib.import_module("contactmg." + name)
+    deprecations = [w for w in caught if issubclass(w.category, DeprecationWarning)]
+    assert len(deprecations) == 1, (name, [str(w.message) for w in caught])
+    assert "contactmg." + name + " is deprecated" in str(deprecations[0].message)
+    homes = [importlib.import_module(m) for m in new[name].split()]
+    for n in names:
+        assert any(getattr(h, n, None) is getattr(mod, n) for h in homes), (name, n)
+from contactmg.two_body import Body, ContactPair  # the old spelling of the two-body imports
+from contactmg.loadpath import LoadPath
+assert Body is contactmg.Body and ContactPair is contactmg.ContactPair and LoadPath is contactmg.LoadPath
+print("ok")
+"""
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0 and r.stdout.strip() == "ok", r.stderr

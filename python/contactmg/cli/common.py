@@ -42,20 +42,44 @@ def _nonneg_float(name, positive=False):
     return parse
 
 
+class OutputPath(str):
+    """A file path an option writes to (checked by _writable): its missing folders are made by
+    make_output_folders once the whole command line has been parsed."""
+
+
 def _writable(path: str) -> str:
-    """A path an output can be written to ("-": standard output), checked before any work."""
+    """A path an output can be written to ("-": standard output), checked before any work. Folders
+    that do not exist yet are fine where the nearest existing one is a writable directory: they are
+    made before the command runs (make_output_folders), not here, so that a command line refused
+    for another argument leaves nothing behind."""
     if path == "-":
         return path
     if not path.strip():
         raise argparse.ArgumentTypeError("an output path is empty")
     d = os.path.dirname(os.path.abspath(path))
-    if not os.path.isdir(d):
-        raise argparse.ArgumentTypeError(f"cannot write {path}: directory {d} does not exist")
-    if not os.access(d, os.W_OK) or (os.path.exists(path) and not os.access(path, os.W_OK)):
+    existing = d
+    while not os.path.exists(existing):
+        existing = os.path.dirname(existing)
+    if not os.path.isdir(existing):
+        raise argparse.ArgumentTypeError(f"cannot write {path}: {existing} is not a directory")
+    if not os.access(existing, os.W_OK | os.X_OK) or (os.path.exists(path) and not os.access(path, os.W_OK)):
         raise argparse.ArgumentTypeError(f"cannot write {path}: permission denied")
     if os.path.isdir(path):
         raise argparse.ArgumentTypeError(f"cannot write {path}: it is a directory")
-    return path
+    return OutputPath(path)
+
+
+def make_output_folders(args) -> None:
+    """Make the missing folders of every output path of the parsed command line (--json out/x.json
+    writes into a new out/); ValueError where one cannot be made."""
+    for value in vars(args).values():
+        for path in value if isinstance(value, list) else [value]:
+            if isinstance(path, OutputPath):
+                folder = os.path.dirname(os.path.abspath(path))
+                try:
+                    os.makedirs(folder, exist_ok=True)
+                except OSError as e:
+                    raise ValueError(f"cannot make the folder {folder} for {path}: {e.strerror}") from None
 
 
 def _with_suffix(kind: str, suffixes):

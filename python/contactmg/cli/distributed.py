@@ -6,7 +6,8 @@ from __future__ import annotations
 
 import sys
 
-from .common import EXIT_BAD_INPUT, EXIT_NO_CONVERGENCE, EXIT_OK, _emit_json, peak_rss_mb, stop_fields
+from .common import (EXIT_BAD_INPUT, EXIT_NO_CONVERGENCE, EXIT_OK, _emit_json, make_output_folders, peak_rss_mb,
+                     stop_fields)
 
 
 def wanted() -> bool:
@@ -56,6 +57,7 @@ def run(args) -> int:
     comm = get_comm()
     try:
         _refuse_unsupported(args)  # the same arguments, the same answer on every rank
+        make_output_folders(args)  # every rank: a folder that exists already is no error
     except ValueError as e:
         if comm.rank == 0:
             print(f"contactmg {args.command}: error: {e}", file=sys.stderr)

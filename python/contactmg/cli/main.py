@@ -4,9 +4,10 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+import warnings
 from typing import List, Optional
 
-from .common import (EXIT_BAD_INPUT, EXIT_NO_CONVERGENCE, EXIT_OK, MAX_LEVELS, PLOT_SUFFIXES, _Parser, _emit_json, _nonneg_float, _positive_int, _with_suffix, _writable, add_path_arguments, add_report_options, add_stop_options, add_thread_options, hertz_report, release_after_build, stop_fields, use_ordering, write_boundary_stress_plot)
+from .common import (EXIT_BAD_INPUT, EXIT_NO_CONVERGENCE, EXIT_OK, MAX_LEVELS, PLOT_SUFFIXES, _Parser, _emit_json, _nonneg_float, _positive_int, _with_suffix, _writable, add_path_arguments, add_report_options, add_stop_options, add_thread_options, hertz_report, make_output_folders, release_after_build, stop_fields, use_ordering, write_boundary_stress_plot)
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -107,14 +108,33 @@ def run_hertz(args) -> int:
     return EXIT_OK if (path.converged if cli_path.wanted(args) else result.converged) else EXIT_NO_CONVERGENCE
 
 
+def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """A warning of a command as one line: the user of the command line has no use for the Python
+    source line that the warnings module prints by default."""
+    text = " ".join(str(message).split())
+    try:
+        print(f"contactmg: warning: {text}", file=file if file is not None else sys.stderr)
+    except OSError:  # standard error closed: the warning is lost, as the default would lose it
+        pass
+
+
 def main(argv: Optional[List[str]] = None) -> int:
-    """The command line: parse `argv` and run the command; returns the exit status."""
+    """The command line: parse `argv` and run the command; returns the exit status. Warnings print as
+    one line `contactmg: warning: ...` while it runs; the library's own format is restored after (a
+    caller in the same process keeps it)."""
+    with warnings.catch_warnings():
+        warnings.showwarning = _show_warning
+        return _main(argv)
+
+
+def _main(argv: Optional[List[str]]) -> int:
     parser = _parser()
     args = parser.parse_args(argv)
     from . import distributed
     if distributed.wanted():
         return distributed.run(args) if args.command in ("hertz", "sphere") else distributed.refuse(args)
     try:
+        make_output_folders(args)
         if args.command == "hertz":
             return run_hertz(args)
         if args.command == "cylinders":

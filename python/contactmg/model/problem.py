@@ -110,7 +110,7 @@ class Body:
     traction: Optional[Dict[int, VectorField]] = None
     pressure: Optional[Dict[int, float]] = None
     springs: Optional[Dict[int, Union[float, Sequence[float]]]] = None
-    point_loads: Sequence[PointLoad] = ()
+    point_loads: Optional[Sequence[PointLoad]] = ()
     gravity: Optional[Sequence[float]] = None
 
     def __post_init__(self):
@@ -123,7 +123,16 @@ class Body:
             v = getattr(self, name)
             if v is not None and not isinstance(v, dict):
                 raise TypeError(f"{name} must be a dict {{facet tag: value}}, got {type(v).__name__}")
-        self.point_loads = [self.point_loads] if isinstance(self.point_loads, PointLoad) else list(self.point_loads)
+        # None means no point loads, as it means no load for every other optional load
+        if self.point_loads is None:
+            self.point_loads = []
+        elif isinstance(self.point_loads, PointLoad):
+            self.point_loads = [self.point_loads]
+        elif isinstance(self.point_loads, (str, bytes, dict)) or not hasattr(self.point_loads, "__iter__"):
+            raise TypeError("point_loads must be a PointLoad or a sequence of PointLoad (None: no point loads), "
+                            f"got {type(self.point_loads).__name__}")
+        else:
+            self.point_loads = list(self.point_loads)
         dirichlet = [self.dirichlet] if isinstance(self.dirichlet, Dirichlet) else list(self.dirichlet)
         for bc in dirichlet:
             if not isinstance(bc, Dirichlet):

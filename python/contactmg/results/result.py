@@ -322,7 +322,8 @@ class ContactResult:
         contact nodes); tangential_traction (tangential force / measure, global x, y(, z));
         slip (see slip(), global); normal_stress and tangential_stress (the contact tractions in
         the nodal contact frame [n] and [t(, s)], normal negative in compression); with the
-        problem known, von_mises (of the recovered nodal stress)."""
+        problem known, von_mises (of the recovered nodal stress); for several bodies body_id (the
+        body of each node, to tell the bodies apart in a viewer)."""
         n, d = self.mesh.num_points, self.mesh.dim
         sn = np.zeros(n)
         st = np.zeros((n, d - 1))
@@ -336,6 +337,12 @@ class ContactResult:
                "contact_pressure": -sn, "tangential_traction": tt, "slip": self.slip()}
         if self.problem is not None:
             out["von_mises"] = self.von_mises("nodes")
+        # here rather than in Problem.write_vtu alone, so that every writer of a result (write_vtu,
+        # the load path's series, the command line's outputs) has it
+        body_id = self.problem.body_id if self.problem is not None and self.problem.multibody \
+            else self.extra.get("body_id")
+        if body_id is not None:
+            out["body_id"] = np.asarray(body_id, dtype=np.int32)
         return out
 
     def cell_data(self) -> Dict[str, np.ndarray]:
@@ -362,7 +369,8 @@ class ContactResult:
     def summary(self) -> str:
         """A plain-text table of the solve: method, law, status, cycles, dofs, solve seconds, the
         contact/stick/slip node counts, the contact extent, and with the problem known the total
-        contact force, the reactions per Dirichlet tag, the largest von Mises stress and the
+        contact force, the reactions per Dirichlet tag, the elastic supports' forces per tag (with
+        the reactions and contact forces they balance the load), the largest von Mises stress and the
         largest violation of the contact conditions (check())."""
         after = self.extra.get("switched_to_tnnmg_after")
         method = self.method if after is None else f"{self.method}, then tnnmg after cycle {after}"
@@ -375,6 +383,7 @@ class ContactResult:
             vec = lambda v: "(" + ", ".join(f"{x:.6g}" for x in np.asarray(v)) + ")"
             rows += [(f"contact force {k}", vec(v)) for k, v in self.contact_forces().items()]
             rows += [(f"reaction {k}", vec(v)) for k, v in self.reactions().items()]
+            rows += [(f"spring force {k}", vec(v)) for k, v in self.spring_forces().items()]
             rows.append(("max von Mises", f"{float(self.von_mises().max(initial=0.0)):.6g}"))
             check = self.check()
             worst = max((k for k in check if k != "max"), key=lambda k: check[k])
