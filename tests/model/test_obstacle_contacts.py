@@ -99,6 +99,14 @@ def test_a_sphere_given_inside_out_is_refused():
         cm.Problem(body, obstacle=cm.SphereObstacle(ball, 1.0, inside=True))
 
 
+def test_a_shallow_initial_penetration_is_reported_too():
+    """0.02 inside a block of facets 0.125 long: below the facet size, still a load on the body."""
+    h = _block(3)
+    body = cm.Body(h, MAT, [cm.Dirichlet(TOP, (0.0, 0.0))])
+    with pytest.warns(UserWarning, match=r"start inside the obstacle by up to 0.02 "):
+        cm.Problem(body, contacts=[cm.ObstacleContact(0, BOTTOM, cm.PlaneObstacle((0.0, 0.02), (0.0, -1.0)))])
+
+
 def test_deep_initial_penetration_is_reported_unless_intended():
     h = _block(3)
     body = cm.Body(h, MAT, [cm.Dirichlet(TOP, (0.0, 0.0))])

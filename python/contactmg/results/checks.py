@@ -88,6 +88,10 @@ def contact_conditions(problem, result, raise_on_violation: bool = False, tol: f
     # the iterate's own reactions and contact forces count up to that bound, no further
     own = max(float(np.abs(sl[:, 0]).max(initial=0.0)), float(np.abs(r[fixed]).max(initial=0.0)))
     scale = max(float(np.abs(load).max(initial=0.0)), min(own, moved))
+    if scale <= 1e-9 * moved:
+        # its supports move it without loading it (lifted off its obstacle): forces of round-off,
+        # measured against the stiffness times the prescribed displacement
+        scale = moved
     force_sum = max(float(np.abs(load).sum()), scale)
     if scale == 0.0:
         # nothing loads the body: its solution is zero, and the stiffness times the iterate is what

@@ -304,6 +304,15 @@ def default_method(problem) -> str:
     return "nmg"
 
 
+def _held_by_contact(problem) -> bool:
+    """Does some body of `problem` have rigid motions that only its contacts hold? Algorithm 2's
+    friction bound lags the normal stress, which is zero before the body touches: a load along a
+    motion only friction holds moved such a body away (a 2 x 1 block pushed sideways, |u| = 2e8 after
+    200 cycles), where the switch to TNNMG solves it in 12-23 cycles (0032-two-body-cycle)."""
+    parts = getattr(problem, "parts", None) or [problem]
+    return any(bool(getattr(part, "floating", None)) for part in parts)
+
+
 def resolve_options(problem, options=None) -> SolverOptions:
     """`options` (None: the defaults) with every problem-dependent default (a field None) filled in
     for `problem`: the one place these defaults are decided.
@@ -314,7 +323,8 @@ def resolve_options(problem, options=None) -> SolverOptions:
     projected_coarse_correction: on where a contact frame is rotated on one body (off for several
     bodies, 0032-two-body-cycle); local_smoothing: on for adaptive hierarchies; ordering:
     DEFAULT_ORDERING; switch_rate: SWITCH_RATE where the method is the solver's choice, Algorithm 2,
-    and the coarse levels were made from a fine mesh alone or the bodies are several, else 0. Left
+    and the coarse levels were made from a fine mesh alone, the bodies are several or a body is held
+    only by its contacts, else 0. Left
     None: linear and lines (the core's own)."""
     o = options_from(options)
     chosen = o.method is None
@@ -345,6 +355,7 @@ def resolve_options(problem, options=None) -> SolverOptions:
         changes["ordering"] = DEFAULT_ORDERING
     if o.switch_rate is None:
         auto = (chosen and o.method == "nmg" and problem.law != "linear"
-                and (problem.coarse_levels_from_mesh() or getattr(problem, "multibody", False)))
+                and (problem.coarse_levels_from_mesh() or getattr(problem, "multibody", False)
+                     or _held_by_contact(problem)))
         changes["switch_rate"] = SWITCH_RATE if auto else 0.0
     return o.replace(**changes) if changes else o
