@@ -223,13 +223,14 @@ class ContactSolver {
         R.switched_at = R.cycles;
         {
           TnnmgStep<d, Law> step(P_, H_, C_, built_, it_, cyc, fine_cycle(), fine_order(cyc.ordering));
-          run_loop(step, cyc, reference, mon_, R, 0, false, true);
+          run_loop(step, cyc, reference, mon_, R, 0, false, true, true);
         }
-        // A TNNMG step can stall short of the solution: its projected Newton direction need not be a
+        // A TNNMG phase can stall short of the solution: its projected Newton direction need not be a
         // descent direction, and a step along a nearly free motion of a body held by contact has no
-        // energy norm to measure (a frictionless roller guided at its top, two bodies). Algorithm 2's
-        // cycles are monotone from any iterate: they finish the solve, under the same stop.
-        if (!R.converged && R.status.rfind("stalled", 0) == 0) {
+        // energy norm to measure (a frictionless roller guided at its top, two bodies); or its line
+        // search is blocked at once, step after step (a body closing a gap to its obstacle). Algorithm
+        // 2's cycles are monotone from any iterate: they finish the solve, under the same stop.
+        if (!R.converged && (R.status == kSwitchStatus || R.status.rfind("stalled", 0) == 0)) {
           MonotoneMultigridStep<d, Law> step(P_, H_, C_, built_, it_, cyc, fine_order(cyc.ordering), tied_.get(), workspace());
           run_loop(step, cyc, reference, mon_, R, 0, false, true);
         }

@@ -43,9 +43,20 @@ inline bool contracts_slowly(const SolveResult& R, double rate) {
 // and counts its cycles against the same max_cycles (a new loop, as each Tresca solve of
 // Algorithm 1, starts both afresh).
 // reference: the canonical u* (storage order) whose error ||u - u*||_A each cycle records, or nullptr.
+// Whether the line search of the last kSwitchWindow steps was blocked: each moved by less than
+// kBlockedStep of its direction (a TNNMG direction that runs into a bound at once).
+constexpr double kBlockedStep = 1e-3;
+inline bool steps_blocked(const SolveResult& R) {
+  const std::size_t n = R.history.size();
+  if (n < (std::size_t)kSwitchWindow) return false;
+  for (std::size_t k = n - kSwitchWindow; k < n; ++k)
+    if (!(R.history[k].step_size < kBlockedStep)) return false;
+  return true;
+}
+
 template <class Step>
 bool run_loop(Step& step, const SolverOptions& opt, const double* reference, Monitor& mon, SolveResult& R, int outer,
-              bool may_switch = false, bool goes_on = false) {
+              bool may_switch = false, bool goes_on = false, bool back_when_blocked = false) {
   if (!goes_on) R.first_correction = -1;
   double& first = R.first_correction;
   R.status = "no convergence in " + std::to_string(opt.max_cycles) + " cycles";
@@ -97,7 +108,7 @@ bool run_loop(Step& step, const SolverOptions& opt, const double* reference, Mon
       R.status = "converged";
       return true;
     }
-    if (may_switch && contracts_slowly(R, opt.switch_rate)) {
+    if ((may_switch && contracts_slowly(R, opt.switch_rate)) || (back_when_blocked && steps_blocked(R))) {
       R.status = kSwitchStatus;
       return false;
     }

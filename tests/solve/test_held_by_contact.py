@@ -180,3 +180,38 @@ def test_a_box_on_a_15_degree_slope_slides_below_tan_15_degrees(F, held):
         with pytest.raises(ValueError, match=r"translation along \[-0.966, 0.0, -0.259\].*needs a friction coefficient "
                                              r"of about 0.26[89] where the contacts have 0.26"):
             make()
+
+
+def _free_block(levels, origin=(0.0, 0.0), **loads):
+    from contactmg.mesh.generators import RECT_BOTTOM, rectangle
+
+    h = cm.MeshHierarchy.build(rectangle(4, 2, 2.0, 1.0, origin=origin), levels)
+    body = cm.Body(h, MAT, [], contact_tags=[RECT_BOTTOM], **loads)
+    return cm.Problem(body, obstacle=cm.PlaneObstacle((0.0, 0.0), (0.0, -1.0)), friction=cm.Coulomb(0.3))
+
+
+@pytest.mark.parametrize("levels", [3, 4, 5])
+def test_a_block_pushed_sideways_is_held_by_friction_alone(levels):
+    """No supports, traction (0.2, -1) on the top, Coulomb 0.3: only friction holds the block
+    sideways, and before it touches nothing does. The default solve converges in at most 30 cycles
+    at every level, the floor's force balancing the load."""
+    from contactmg.mesh.generators import RECT_TOP
+
+    p = _free_block(levels, traction={RECT_TOP: (0.2, -1.0)})
+    r = p.solve()
+    assert r.converged and r.cycles <= 30
+    force = r.contact_forces()["obstacle"]
+    assert np.allclose(force + r.canonical_load().sum(axis=0), 0.0, atol=1e-8 * 2.0)
+
+
+def test_a_block_starting_above_the_floor_falls_onto_it():
+    """0.5 above the floor, pressed down by a pressure: the default solve brings it onto the floor,
+    which then carries the whole load."""
+    from contactmg.mesh.generators import RECT_TOP
+
+    p = _free_block(4, origin=(0.0, 0.5), pressure={RECT_TOP: 1.0})
+    r = p.solve()
+    assert r.converged and r.cycles <= 60
+    force = r.contact_forces()["obstacle"]
+    assert force[1] == pytest.approx(2.0, rel=1e-8)
+    assert np.all(r.displacement[p.contact.nodes, 1] <= -0.5 + 1e-12)
