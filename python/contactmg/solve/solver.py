@@ -175,17 +175,17 @@ class Solver:
         # "converged" only after the final check: a cycle's stop measures the step, which a nearly
         # free motion (a body held by contact) or a stalled iterate can make small while the
         # equations are not solved. Cycles left go on from the iterate; then the verdict.
+        passed = not res.converged or self._passes_final_check(res, opts)
         for _ in range(FINAL_CHECK_RESTARTS):
-            if not res.converged or self._passes_final_check(res, opts):
-                break
             left = opts.max_cycles - res.cycles
-            if left <= 0:
+            if passed or left <= 0:
                 break
             more = self.core.solve(raw["u"], opts.replace(max_cycles=left).to_core(), progress=progress,
                                    reference=error_reference)
             raw = _joined(raw, more)
             res = self._result(raw, opts, self.build_seconds)
-        if res.converged and not self._passes_final_check(res, opts):
+            passed = not res.converged or self._passes_final_check(res, opts)
+        if not passed:
             res.converged = False
             v = res.extra["final_check"]
             worst = max((k for k in v if k != "max"), key=v.get)
