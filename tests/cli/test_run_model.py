@@ -675,3 +675,52 @@ def test_a_fine_mesh_alone_from_the_model_file(tmp_path, capsys, kind):
     # the same mesh, the same law of statics, the same answer
     f, g = np.asarray(rep["contact_forces"]["obstacle"]), np.asarray(ref["contact_forces"]["obstacle"])
     assert np.abs(f - g).max() <= 1e-6 * np.abs(g).max()
+
+
+HALF_DISK = """
+[[body]]
+name = "disk"
+mesh = "disk.msh"
+levels = 3
+material = { E = 2000.0, nu = 0.28 }
+[[body.dirichlet]]
+tags = [2]
+value = [0.0, -0.01]
+[[body.surface]]
+tags = [1]
+type = "sphere"
+center = [0.0, 0.4]
+radius = 0.4
+
+[[obstacle]]
+body = "disk"
+tags = [1]
+type = "plane"
+point = [0.0, 0.0]
+normal = [0.0, -1.0]
+"""
+
+
+def test_a_body_surface_makes_the_refinement_follow_it(tmp_path):
+    """[[body.surface]]: the half disk's arc refined onto its circle (its new nodes on radius 0.4 to
+    round-off), where without the key it stays on the coarse chords; a bad surface is named."""
+    from contactmg.mesh.generators import polar_half_disk
+    from contactmg.mesh.io import write_mesh
+
+    write_mesh(tmp_path / "disk.msh", polar_half_disk())
+    (tmp_path / "disk.toml").write_text(HALF_DISK)
+
+    def arc_radii(model):
+        m = model.problem.mesh
+        nodes = np.unique(m.facets[m.facet_tags == 1])
+        return np.linalg.norm(m.points[nodes] - [0.0, 0.4], axis=1)
+
+    r = arc_radii(read_model(tmp_path / "disk.toml"))
+    assert np.abs(r - 0.4).max() < 1e-12
+    (tmp_path / "faceted.toml").write_text(HALF_DISK.split("[[body.surface]]")[0] + HALF_DISK.split("radius = 0.4\n")[1])
+    with pytest.warns(UserWarning, match="approximate a curved surface"):
+        faceted = arc_radii(read_model(tmp_path / "faceted.toml"))
+    assert np.abs(faceted - 0.4).max() > 1e-4
+    (tmp_path / "bad.toml").write_text(HALF_DISK.replace('type = "sphere"', 'type = "cylinder"'))
+    with pytest.raises(ModelError, match=r"body\[0\].surface\[0\].type: a 2D section of a cylinder is a circle"):
+        read_model(tmp_path / "bad.toml")

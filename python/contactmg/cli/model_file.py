@@ -35,7 +35,8 @@ from .common import MAX_LEVELS, PLOT_SUFFIXES
 MAX_STEPS = 100000
 TOP_KEYS = ("description", "body", "obstacle", "pair", "friction", "steps", "solver", "output")
 BODY_KEYS = ("name", "mesh", "levels", "hierarchy", "material", "materials", "dirichlet", "traction", "pressure", "spring",
-             "point_load", "body_force", "gravity")
+             "point_load", "body_force", "gravity", "surface")
+SURFACE_TYPES = ("sphere", "cylinder")
 OBSTACLE_TYPES = ("plane", "sphere", "cylinder", "mesh")
 FRICTION_LAWS = ("frictionless", "coulomb", "tresca")
 PATH_METHODS = ("nmg", "fixed-point")
@@ -379,9 +380,10 @@ def _read_body(t: _Table, base: str):
         if any(m.density is None for m in regions):
             raise t.error("gravity", "needs a density in the material" + ("" if isinstance(material, Material)
                                                                             else " of every region"))
+    projector = _read_surfaces(t, mesh, mesh_file)
     t.done()
     try:
-        hierarchy = {"refine": lambda: MeshHierarchy.build(mesh, levels),
+        hierarchy = {"refine": lambda: MeshHierarchy.build(mesh, levels, projector=projector),
                      "coarsening": lambda: MeshHierarchy.coarsened(mesh),
                      "aggregation": lambda: MeshHierarchy.aggregated(mesh)}[kind]()
     except ValueError as e:
@@ -390,6 +392,47 @@ def _read_body(t: _Table, base: str):
     body = Body(hierarchy, material, dirichlet, body_force=body_force, traction=traction or None,
                 pressure=pressure or None, springs=springs or None, point_loads=point_loads, gravity=gravity)
     return body, BodyInfo(name, mesh_file, levels, hierarchy.finest, kind)
+
+
+def _read_surfaces(t: _Table, mesh: Mesh, mesh_file: str):
+    """The projector of the body's [[body.surface]] tables (None without one): the analytic curved
+    surfaces its facets of the given tags lie on. Refinement puts new boundary nodes on them, and
+    contact pairs measure their gaps on them."""
+    from ..mesh.generators import CircleProjector
+    from ..mesh.generators_3d import CylinderProjector
+
+    d, projectors, claimed = mesh.dim, [], {}
+    for k, st in enumerate(t.tables("surface")):
+        b = _Table(t.file, t.at(f"surface[{k}]"), st, ("tags", "type", "center", "point", "axis", "radius"))
+        tags = b.tags("tags", mesh, mesh_file)
+        for tag in tags:
+            if tag in claimed:
+                raise b.error("tags", f"tag {tag} already lies on surface[{claimed[tag]}]")
+            claimed[tag] = k
+        kind = b.string("type", required=True, choices=SURFACE_TYPES)
+        if kind == "sphere":  # a circle in 2D
+            b.allowed = ("tags", "type", "center", "radius")
+            projectors.append(CircleProjector(b.vector("center", d, required=True),
+                                              b.number("radius", required=True, positive=True), tags))
+        else:
+            if d == 2:
+                raise b.error("type", 'a 2D section of a cylinder is a circle: give type = "sphere" with center and radius')
+            b.allowed = ("tags", "type", "point", "axis", "radius")
+            axis = b.vector("axis", d, required=True)
+            if not any(axis):
+                raise b.error("axis", "must not be the zero vector")
+            projectors.append(CylinderProjector(b.number("radius", required=True, positive=True),
+                                                b.vector("point", d, required=True), axis, tags))
+        b.done()
+    if not projectors:
+        return None
+
+    def project(points, tags):
+        # each surface moves only the points of its own tags
+        for p in projectors:
+            points = p(points, tags)
+        return points
+    return project
 
 
 def _per_tag(t: _Table, name: str, key: str, mesh: Mesh, mesh_file: str, read) -> dict:

@@ -13,7 +13,7 @@ import numpy as np
 from .. import _core
 from ..mesh.mesh import Mesh, unique_rows
 from ..mesh.quality import _MEASURES as _QUALITY
-from ..mesh.quality import cell_quality
+from ..mesh.quality import cell_quality, curved_facet_tags
 
 # A projector moves the new boundary nodes of a refinement: projector(points (m, d), facet tags
 # (m,)) -> moved points (m, d). One that also defines project_refinement(coarse, r) (CadModel's)
@@ -336,6 +336,15 @@ class MeshHierarchy:
         h = cls(*_refine_uniformly(mesh, levels, projector, relax), time.perf_counter() - t0)
         h._recipe = (mesh, projector, bool(relax))
         h.projector = projector
+        if projector is None and levels > 1:
+            curved = curved_facet_tags(mesh)
+            if curved:
+                turns = ", ".join(f"{t} ({deg:.1f} degrees)" for t, deg in sorted(curved.items()))
+                warnings.warn(f"the facets tagged {turns} approximate a curved surface (neighbouring facets turn by up to "
+                              "the angle given), and refinement without a projector keeps them faceted: contact on them "
+                              "sees the coarse facets, not the surface. Give MeshHierarchy.build(..., projector=...) (an "
+                              "analytic projector, or a CadModel's projector()) to follow the surface", UserWarning,
+                              stacklevel=2)
         if projector is not None:
             h.min_quality = [float(cell_quality(m).min()) for m in h.meshes]
             q0 = h.min_quality[0]

@@ -116,3 +116,39 @@ def boundary_caps(mesh, facet_mask=None) -> int:
     state[inv[:len(ref)]] = 1 + mask
     s = state[inv[len(ref):]].reshape(-1, len(local))
     return int(np.sum(((s > 0).sum(axis=1) >= 2) & (s == 2).any(axis=1)))
+
+
+# Neighbouring boundary facets of one tag whose normals turn by more than CURVED_MIN_DEG and less
+# than CURVED_MAX_DEG approximate a curved surface (a sharp edge turns by more, a flat face not at all).
+CURVED_MIN_DEG, CURVED_MAX_DEG = 0.5, 30.0
+
+
+def curved_facet_tags(mesh) -> dict:
+    """{tag: largest turn in degrees} of the facet tags whose facets approximate a curved surface:
+    some two facets of the tag that share a node have normals between CURVED_MIN_DEG and
+    CURVED_MAX_DEG apart."""
+    from ..mesh.mesh import facet_area_vectors
+
+    if len(mesh.facets) == 0:
+        return {}
+    n = facet_area_vectors(mesh.points, mesh.facets)
+    n = n / np.maximum(np.linalg.norm(n, axis=1), 1e-300)[:, None]
+    out = {}
+    for tag in np.unique(mesh.facet_tags):
+        sel = np.flatnonzero(mesh.facet_tags == tag)
+        f = mesh.facets[sel]
+        # pairs of facets of the tag that share a node: sort (node, facet) and pair neighbours
+        node = f.ravel()
+        fac = np.repeat(np.arange(len(sel)), f.shape[1])
+        order = np.argsort(node, kind="stable")
+        node, fac = node[order], fac[order]
+        same = node[1:] == node[:-1]
+        a, b = fac[:-1][same], fac[1:][same]
+        if len(a) == 0:
+            continue
+        cos = np.clip(np.einsum("ij,ij->i", n[sel[a]], n[sel[b]]), -1.0, 1.0)
+        deg = np.degrees(np.arccos(cos))
+        smooth = deg[(deg > CURVED_MIN_DEG) & (deg < CURVED_MAX_DEG)]
+        if len(smooth):
+            out[int(tag)] = float(smooth.max())
+    return out
