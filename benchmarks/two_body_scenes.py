@@ -14,7 +14,7 @@ Scenes:
   hemisphere_on_plane_problem: the upper one alone on a rigid plane at half the approach.
 - stack_problem: three blocks of unequal sizes stacked on a rigid floor, no supports.
 
-The helpers at the end measure what the contact boundary of a problem leaves out
+The functions at the end measure what the contact boundary of a problem leaves out
 (nonmortar_nodes_left_out) and the per-body force balance of a multi-body result (body_balance).
 """
 from __future__ import annotations
