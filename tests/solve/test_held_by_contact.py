@@ -204,14 +204,78 @@ def test_a_block_pushed_sideways_is_held_by_friction_alone(levels):
     assert np.allclose(force + r.canonical_load().sum(axis=0), 0.0, atol=1e-8 * 2.0)
 
 
-def test_a_block_starting_above_the_floor_falls_onto_it():
-    """0.5 above the floor, pressed down by a pressure: the default solve brings it onto the floor,
-    which then carries the whole load."""
+@pytest.mark.parametrize("levels", [3, 5])
+def test_a_block_starting_above_the_floor_falls_onto_it(levels):
+    """0.5 above the floor (half its height), pressed down by a pressure: the default solve (its
+    nested start) brings it onto the floor in at most 30 cycles of the finest level, and the floor
+    then carries the whole load."""
     from contactmg.mesh.generators import RECT_TOP
 
-    p = _free_block(4, origin=(0.0, 0.5), pressure={RECT_TOP: 1.0})
+    p = _free_block(levels, origin=(0.0, 0.5), pressure={RECT_TOP: 1.0})
     r = p.solve()
-    assert r.converged and r.cycles <= 60
+    assert r.converged and r.cycles <= 30
+    assert r.extra["nested_start"]["kept"]
     force = r.contact_forces()["obstacle"]
     assert force[1] == pytest.approx(2.0, rel=1e-8)
     assert np.all(r.displacement[p.contact.nodes, 1] <= -0.5 + 1e-12)
+
+
+def _plate_on_cylinder(levels, friction):
+    """A 2 x 0.2 half plate (E 1000: its free end would deflect by about 3) pressed by a pressure of
+    1 onto a rigid cylinder of radius 1 under its symmetry plane x = 0, held by the cylinder and
+    the symmetry condition alone (nothing holds it vertically but the contact)."""
+    from contactmg.mesh.generators import RECT_BOTTOM, RECT_LEFT, RECT_TOP, rectangle
+
+    h = cm.MeshHierarchy.build(rectangle(8, 2, 2.0, 0.2), levels)
+    body = cm.Body(h, cm.Material(1000.0, 0.3), [cm.Dirichlet(RECT_LEFT, (0.0, None))], contact_tags=[RECT_BOTTOM],
+                   pressure={RECT_TOP: 1.0})
+    return cm.Problem(body, obstacle=cm.SphereObstacle((0.0, -1.0), 1.0), friction=friction)
+
+
+@pytest.mark.parametrize("friction", [None, cm.Coulomb(0.3)], ids=["frictionless", "coulomb"])
+def test_a_plate_held_by_a_cylinder_converges_in_cycles_that_do_not_grow(friction):
+    """Levels 3-5 in at most 30 cycles each, not growing from level 4 to 5 (18/25/24 frictionless,
+    18/17/18 Coulomb when written); the reactions, the cylinder's force and
+    the load balance to 1e-8 of the load (from u = 0 the monotone corrections crept by 1e-3 a cycle
+    and 1000 cycles did not reach it)."""
+    counts = []
+    for levels in (3, 4, 5):
+        p = _plate_on_cylinder(levels, friction)
+        r = p.solve()
+        assert r.converged, r.status
+        counts.append(r.cycles)
+        total = r.contact_forces()["obstacle"] + sum(r.reactions().values()) + r.canonical_load().sum(axis=0)
+        assert np.abs(total).max() <= 1e-8 * np.abs(r.canonical_load().sum(axis=0)).max()
+        assert contact_conditions(p, r)["max"] < 1e-6
+    assert max(counts) <= 30 and counts[2] <= counts[1] + 2, counts
+
+
+def test_the_nested_start_reaches_the_answer_of_the_zero_start():
+    """The start changes the path, not the answer: the sideways-pushed block (unique answer) from
+    the nested start and from u = 0 agree to the stop's accuracy, and the nested start's energy was
+    below that of u = 0 (it is kept only then)."""
+    from contactmg.mesh.generators import RECT_TOP
+
+    p = _free_block(4, traction={RECT_TOP: (0.2, -1.0)})
+    nested = cm.Solver(p, {"rtol": 1e-12}).solve()
+    zero = cm.Solver(p, {"rtol": 1e-12, "start": "zero"}).solve()
+    assert nested.converged and zero.converged
+    assert nested.options["start"] == "nested" and zero.options["start"] == "zero"
+    assert nested.extra["nested_start"]["kept"] and "nested_start" not in zero.extra
+    assert np.abs(nested.displacement - zero.displacement).max() <= 1e-8 * np.abs(zero.displacement).max()
+    assert nested.extra["nested_start"]["levels"] == [0, 1, 2]
+
+
+def test_a_hierarchy_without_injection_starts_from_zero():
+    """Aggregated coarse spaces have no coarse node that is a fine node: the nested start has no
+    coarse problems to solve, says so by an empty record, and the solve starts from u = 0."""
+    from contactmg.mesh.generators import RECT_BOTTOM, RECT_TOP, rectangle
+
+    fine = cm.MeshHierarchy.build(rectangle(4, 2, 2.0, 1.0), 4).finest
+    h = cm.MeshHierarchy.aggregated(fine, coarsest=30)
+    p = cm.Problem(cm.Body(h, MAT, [], contact_tags=[RECT_BOTTOM], pressure={RECT_TOP: 1.0}), obstacle=FLOOR,
+                   friction=cm.Coulomb(0.3))
+    r = p.solve()
+    assert r.converged
+    assert r.extra["nested_start"]["levels"] == []
+    assert r.contact_forces()["obstacle"][1] == pytest.approx(2.0, rel=1e-8)

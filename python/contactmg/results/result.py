@@ -366,6 +366,17 @@ class ContactResult:
                              "contactmg.write_mesh(path, result.mesh, point_data=result.point_data()))")
         write_mesh(path, self.mesh, point_data=self.point_data(), cell_data=self.cell_data())
 
+    def _nested_rows(self) -> list:
+        """The summary's row of a nested start: each coarse level's cycles and their work in cycles
+        of the finest level."""
+        rec = self.extra.get("nested_start")
+        if not rec or not rec.get("levels"):
+            return []
+        kept = "" if rec.get("kept") else " (not taken: no lower energy than u = 0)"
+        return [("nested start", f"levels {rec['levels'][0]}-{rec['levels'][-1]}: "
+                                 f"{' + '.join(str(c) for c in rec['cycles'])} cycles, the work of "
+                                 f"{rec['work']:.3g} finest cycles{kept}")]
+
     def summary(self) -> str:
         """A plain-text table of the solve: method, law, status, cycles, dofs, solve seconds, the
         contact/stick/slip node counts, the contact extent, and with the problem known the total
@@ -376,6 +387,7 @@ class ContactResult:
         method = self.method if after is None else f"{self.method}, then tnnmg after cycle {after}"
         rows = [("method", method), ("law", self.law),
                 ("converged", f"{self.converged} ({self.status})"), ("cycles", str(self.cycles)),
+                *self._nested_rows(),
                 ("dofs", str(self.displacement.size)), ("solve seconds", f"{self.solve_seconds:.4g}")]
         rows += [(k.replace("_", " "), str(v)) for k, v in self.counts().items()]
         rows.append(("contact extent", f"{self.contact_extent:.6g}"))

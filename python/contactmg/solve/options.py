@@ -11,6 +11,7 @@ from typing import Optional
 import numpy as np
 
 METHODS = ("nmg", "fixed-point", "linear", "tnnmg")
+STARTS = ("zero", "nested")
 CYCLES = ("V", "W", "F")
 ORDERINGS = ("coloured", "lexicographic", "hashed")
 LINEAR_CORRECTIONS = ("pcg", "cycle", "coarse")
@@ -116,6 +117,12 @@ class SolverOptions:
     """tnnmg's linear correction: "pcg", "cycle" or "coarse" (None: the core's default)."""
     lines: Optional[bool] = None
     """tnnmg: line smoothing in the linear correction (None: the core's default)."""
+    start: Optional[str] = None
+    """Where a solve given no start value begins: "zero" (u = 0, the paper's counts) or "nested" (the
+    problem solved on its coarse levels first, each solution interpolated to the next as its start:
+    solve/nested.py). None: "nested" where a body is held only by its contacts (one body; its
+    answer may lie far from u = 0), else "zero". The result's cycles are the finest level's; the
+    coarse levels' go to result.extra["nested_start"] (0034-nested-start)."""
     release_hierarchy: bool = False
     """Once the solver is built, release the hierarchy's coarse meshes and transfers and the problem's
     load and Dirichlet values (made again if asked for) and the cycles' workspace after each solve:
@@ -160,6 +167,8 @@ class SolverOptions:
             v = getattr(self, name)
             if v is not None and not isinstance(v, (bool, np.bool_)):
                 raise ValueError(f"{name} must be True or False, got {v!r}")
+        if self.start is not None and self.start not in STARTS:
+            raise ValueError(f"start must be one of {STARTS}, got {self.start!r}")
         if self.switch_rate is not None:
             if not (_is_real(self.switch_rate) and 0 <= self.switch_rate < 1):
                 raise ValueError(f"switch_rate must be a number in [0, 1) (0: never), got {self.switch_rate!r}")
@@ -209,7 +218,7 @@ class SolverOptions:
         out = {}
         for f in dataclasses.fields(self):
             v = getattr(self, f.name)
-            if f.name in ("local_smoothing", "release_hierarchy") or v is None:
+            if f.name in ("local_smoothing", "release_hierarchy", "start") or v is None:
                 if f.name == "method":
                     out["method"] = "nmg"  # unresolved (not through resolve_options): the core's default
                 continue
@@ -324,7 +333,8 @@ def resolve_options(problem, options=None) -> SolverOptions:
     bodies, 0032-two-body-cycle); local_smoothing: on for adaptive hierarchies; ordering:
     DEFAULT_ORDERING; switch_rate: SWITCH_RATE where the method is the solver's choice, Algorithm 2,
     and the coarse levels were made from a fine mesh alone, the bodies are several or a body is held
-    only by its contacts, else 0. Left
+    only by its contacts, else 0; start: "nested" where the one body is held only by its contacts.
+    Left
     None: linear and lines (the core's own)."""
     o = options_from(options)
     chosen = o.method is None
@@ -358,4 +368,8 @@ def resolve_options(problem, options=None) -> SolverOptions:
                 and (problem.coarse_levels_from_mesh() or getattr(problem, "multibody", False)
                      or _held_by_contact(problem)))
         changes["switch_rate"] = SWITCH_RATE if auto else 0.0
+    if o.start is None:
+        nested = (o.method != "linear" and problem.law != "linear" and not getattr(problem, "multibody", False)
+                  and _held_by_contact(problem))
+        changes["start"] = "nested" if nested else "zero"
     return o.replace(**changes) if changes else o

@@ -170,6 +170,9 @@ class Solver:
         if opts.method == "linear":
             reference = self.solve(None, options=opts.replace(method="nmg"))
             return self.solve_known_state(reference, opts, progress=progress, error_reference=error_reference)
+        nested = None
+        if u0 is None and opts.start == "nested" and slip_origin is None and self._given["slip_origin"] is None:
+            u0, nested = self._nested_start(opts)
         raw = self.core.solve(u0, opts.to_core(), progress=progress, reference=error_reference)
         res = self._result(raw, opts, self.build_seconds)
         # "converged" only after the final check: a cycle's stop measures the step, which a nearly
@@ -185,6 +188,9 @@ class Solver:
             raw = _joined(raw, more)
             res = self._result(raw, opts, self.build_seconds)
             passed = not res.converged or self._passes_final_check(res, opts)
+        if nested is not None:
+            res.extra["nested_start"] = nested
+            res.solve_seconds += nested["seconds"]
         if not passed:
             res.converged = False
             v = res.extra["final_check"]
@@ -193,6 +199,20 @@ class Solver:
                           f"(relative to the problem's force and displacement scales; tolerance "
                           f"{res.extra['final_check_tol']:.3g})")
         return res
+
+    def _nested_start(self, opts: SolverOptions):
+        """(start, record) of the nested start (solve/nested.py) with this solve's options, load and
+        Dirichlet values; start None where the hierarchy gives none or it would not help."""
+        from .nested import nested_start
+
+        p = self.problem
+        load = self._given["load"] if self._given["load"] is not None else p.load
+        values = self._given["fixed_values"] if self._given["fixed_values"] is not None else p.fixed_values
+        build = dict(cycle=opts.cycle, nu1=opts.nu1, nu2=opts.nu2, ordering=opts.ordering)
+        start, record = nested_start(p, opts.to_core(), build, load, values)
+        if self.options.release_hierarchy:
+            p.release_vectors()
+        return start, record
 
     def _passes_final_check(self, res: ContactResult, opts: SolverOptions) -> bool:
         """contact_conditions of `res` from the core's residual (no product with a matrix the core has
