@@ -8,8 +8,14 @@ scenes   the Hertz half disk at one level with F from 0 to 1000, nearly incompre
          and sheared with friction: outcome, cycles, asymptotic contraction, solve seconds.
 coulomb  large friction coefficients on the adaptive Hertz hierarchy (levels 9 and 11, F up to 100),
          the uniform triangles at F = 5 (levels 8, 9) and the tetrahedral sphere (F = 0.4 and 40).
+held     bodies held only by their contacts, gaps to close, thin parts and lone meshes
+         (benchmarks/held_scenes.py): a block pushed sideways (levels 3-7; default, nmg, tnnmg), a
+         half plate on a cylinder (levels 3-6; frictionless, Coulomb), a block falling 0.5 onto the
+         floor (levels 3-6), a thin plate pressed across a gap (structured and two gmsh meshes,
+         levels 2-5, start zero and nested), lone meshes of 30 to 2e5 dofs: cycles and the balance
+         of load, reactions and contact forces.
 
-    python benchmarks/methods/robustness.py [--parts scenes coulomb] [--level 7]
+    python benchmarks/methods/robustness.py [--parts scenes coulomb held] [--level 7]
         [--cases adaptive9 uniform8 sphere3] [--quick] [--json PATH]
 """
 import sys
@@ -101,9 +107,52 @@ def run(cases, max_cycles):
     return rows
 
 
+def held(quick):
+    """Rows of the scenes of held_scenes.py: scene, level (or cells), options, cycles of the finest
+    level, the nested start's work in finest cycles, converged, balance, violation, seconds."""
+    import held_scenes as hs
+
+    def one(scene, level, make, options=None):
+        p = make()
+        t = time.perf_counter()
+        r = cm.Solver(p, options or {}).solve()
+        sec = time.perf_counter() - t
+        row = {"scene": scene, "level": level, "options": ", ".join(f"{k}={v}" for k, v in (options or {}).items())
+               or "default", "dofs": int(p.load.size), "cycles": r.cycles, "start": r.options["start"],
+               "start_work": round(float(r.extra.get("nested_start", {}).get("work", 0.0)), 2),
+               "converged": r.converged, "balance": hs.balance(r), "violation": contact_conditions(p, r)["max"],
+               "seconds": sec}
+        print(f"{scene:24s} {str(level):>6s} {row['options']:22s} {row['dofs']:8d} {r.cycles:4d}{'' if r.converged else '!'} "
+              f"{row['start']:>6s} {row['start_work']:6.2f} {row['balance']:9.1e} {sec:7.2f}", flush=True)
+        return row
+
+    sideways, plate, falling, thin = ((3, 4), (3, 4), (3, 4), (2, 3)) if quick else \
+        ((3, 4, 5, 6, 7), (3, 4, 5, 6), (3, 4, 5, 6), (2, 3, 4, 5))
+    meshes = [("structured", None)] + ([] if quick else [("gmsh h 0.07", 0.07), ("gmsh h 0.05", 0.05)])
+    lone2, lone3 = ((2, 8), (1, 5)) if quick else ((2, 5, 16, 64, 220), (1, 3, 8, 18, 30))
+    rows = []
+    for L in sideways:
+        for o in (None, {"method": "nmg"}, {"method": "tnnmg"}):
+            rows.append(one("sideways block", L, lambda: hs.sideways_block(L), o))
+    for L in plate:
+        rows.append(one("plate on cylinder", L, lambda: hs.plate_on_cylinder(L)))
+        rows.append(one("plate on cylinder F 0.3", L, lambda: hs.plate_on_cylinder(L, cm.Coulomb(0.3))))
+    for L in falling:
+        rows.append(one("falling block", L, lambda: hs.falling_block(L)))
+    for name, h in meshes:
+        mesh = hs.thin_plate_mesh(h)
+        for L in thin:
+            for o in ({"start": "zero"}, {"start": "nested"}):
+                rows.append(one(f"thin plate, {name}", L, lambda: hs.thin_plate(mesh, L), o))
+    for dim, sizes in ((2, lone2), (3, lone3)):
+        for n in sizes:
+            rows.append(one(f"lone mesh {dim}D", f"n={n}", lambda: hs.lone_block(n, dim)))
+    return rows
+
+
 def main():
     ap = parser(__doc__)
-    ap.add_argument("--parts", nargs="+", choices=["scenes", "coulomb"], default=["scenes", "coulomb"])
+    ap.add_argument("--parts", nargs="+", choices=["scenes", "coulomb", "held"], default=["scenes", "coulomb", "held"])
     ap.add_argument("--level", type=int, default=7, help="Hertz level of the scenes")
     ap.add_argument("--layer-level", type=int, default=5)
     ap.add_argument("--cases", nargs="+", default=["adaptive9", "uniform8", "sphere3"],
@@ -119,6 +168,8 @@ def main():
         out["scenes"] = run(scenes(a.level, a.layer_level), a.max_cycles)
     if "coulomb" in a.parts:
         out["coulomb"] = run(coulomb_cases(a.cases, **kw), a.max_cycles)
+    if "held" in a.parts:
+        out["held"] = held(a.quick)
     write_result(__file__, a, out)
 
 

@@ -98,6 +98,13 @@ def check_robustness(res):
     assert len(res["scenes"]) == 14 and len(res["coulomb"]) == 8
     for r in res["scenes"] + res["coulomb"]:
         assert r["verified"] and r["finite"], r
+    held = res["held"]
+    assert {r["scene"].split(",")[0] for r in held} == {"sideways block", "plate on cylinder",
+                                                        "plate on cylinder F 0.3", "falling block", "thin plate",
+                                                        "lone mesh 2D", "lone mesh 3D"}
+    for r in held:
+        # every scene converges in at most 30 cycles, its forces balancing the load
+        assert r["converged"] and r["cycles"] <= 30 and r["balance"] < 1e-8 and r["violation"] < 1e-6, r
 
 
 def check_linear_multigrid(res):

@@ -2,6 +2,7 @@
 of statics, the friction law and a solve of the same model through the Python API; bad model files
 refused with exit status 2 and one line naming the file and the key."""
 import json
+import warnings
 import os
 import shutil
 import subprocess
@@ -724,3 +725,79 @@ def test_a_body_surface_makes_the_refinement_follow_it(tmp_path):
     (tmp_path / "bad.toml").write_text(HALF_DISK.replace('type = "sphere"', 'type = "cylinder"'))
     with pytest.raises(ModelError, match=r"body\[0\].surface\[0\].type: a 2D section of a cylinder is a circle"):
         read_model(tmp_path / "bad.toml")
+
+
+def test_a_body_geometry_makes_the_refinement_follow_the_cad(tmp_path):
+    """geometry = the CAD file a .msh was made from: every level's new nodes on the rounded
+    rectangle's quarter circles lie on them to round-off, where the faceted model's stay on the
+    coarse chords; the model solves. A geometry beside a [[body.surface]], or beside a mesh gmsh
+    did not write, is named."""
+    gmsh = pytest.importorskip("gmsh")
+    brep, msh = tmp_path / "plate.brep", tmp_path / "plate.msh"
+    gmsh.initialize(readConfigFiles=False)
+    gmsh.option.setNumber("General.Terminal", 0)
+    try:
+        gmsh.model.occ.addRectangle(0, 0, 0, 2, 1, roundedRadius=0.3)
+        gmsh.model.occ.synchronize()
+        gmsh.write(str(brep))
+        curves = gmsh.model.getEntities(1)
+        bottom = [t for _, t in curves if gmsh.model.occ.getCenterOfMass(1, t)[1] < 0.2]
+        top = [t for _, t in curves if gmsh.model.occ.getCenterOfMass(1, t)[1] > 0.8]
+        gmsh.model.addPhysicalGroup(1, bottom, 1)
+        gmsh.model.addPhysicalGroup(1, top, 2)
+        gmsh.model.addPhysicalGroup(1, [t for _, t in curves if t not in bottom + top], 3)
+        gmsh.model.addPhysicalGroup(2, [1], 1)
+        gmsh.option.setNumber("Mesh.MeshSizeMax", 0.25)
+        gmsh.model.mesh.generate(2)
+        gmsh.write(str(msh))
+    finally:
+        gmsh.finalize()
+    model = """
+[[body]]
+name = "plate"
+mesh = "plate.msh"
+levels = 3
+material = { E = 1000.0, nu = 0.3 }
+[[body.dirichlet]]
+tags = [2]
+value = [0.0, -0.01]
+
+[[obstacle]]
+body = "plate"
+tags = [1]
+type = "plane"
+point = [0.0, 0.0]
+normal = [0.0, -1.0]
+"""
+    (tmp_path / "cad.toml").write_text(model.replace('mesh = "plate.msh"', 'mesh = "plate.msh"\ngeometry = "plate.brep"'))
+    (tmp_path / "faceted.toml").write_text(model)
+
+    def corner_radii(m):
+        # the rounded corners' new boundary nodes against their circles (centres 0.3 in from the corners)
+        x = m.points[np.unique(m.facets)]
+        centres = np.array([[0.3, 0.3], [1.7, 0.3], [1.7, 0.7], [0.3, 0.7]])
+        out = []
+        for c, (sx, sy) in zip(centres, [(-1, -1), (1, -1), (1, 1), (-1, 1)]):
+            sel = (sx * (x[:, 0] - c[0]) > 1e-9) & (sy * (x[:, 1] - c[1]) > 1e-9)
+            out.append(np.abs(np.linalg.norm(x[sel] - c, axis=1) - 0.3))
+        return np.concatenate(out)
+
+    cad = read_model(tmp_path / "cad.toml")
+    assert len(corner_radii(cad.problem.mesh)) > 20 and corner_radii(cad.problem.mesh).max() < 1e-9
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        faceted = read_model(tmp_path / "faceted.toml")
+    assert corner_radii(faceted.problem.mesh).max() > 1e-4
+    res = cad.problem.solve()
+    assert res.converged and res.contact_forces()["obstacle"][1] > 0
+    with_cad = model.replace('mesh = "plate.msh"', 'mesh = "plate.msh"\ngeometry = "plate.brep"')
+    surface = '[[body.surface]]\ntags = [3]\ntype = "sphere"\ncenter = [0.3, 0.3]\nradius = 0.3\n'
+    both = with_cad.replace("\n[[obstacle]]", surface + "\n[[obstacle]]", 1)
+    (tmp_path / "both.toml").write_text(both)
+    with pytest.raises(ModelError, match=r"body\[0\].surface: give the curved surfaces by the geometry or by"):
+        read_model(tmp_path / "both.toml")
+    from contactmg.mesh.io import write_mesh
+    write_mesh(tmp_path / "plate.vtu", faceted.problem.hierarchy.meshes[0])
+    (tmp_path / "vtu.toml").write_text(model.replace('mesh = "plate.msh"', 'mesh = "plate.vtu"\ngeometry = "plate.brep"'))
+    with pytest.raises(ModelError, match=r"body\[0\].geometry: goes with a gmsh .msh mesh"):
+        read_model(tmp_path / "vtu.toml")

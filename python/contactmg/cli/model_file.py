@@ -35,7 +35,7 @@ from .common import MAX_LEVELS, PLOT_SUFFIXES
 MAX_STEPS = 100000
 TOP_KEYS = ("description", "body", "obstacle", "pair", "friction", "steps", "solver", "output")
 BODY_KEYS = ("name", "mesh", "levels", "hierarchy", "material", "materials", "dirichlet", "traction", "pressure", "spring",
-             "point_load", "body_force", "gravity", "surface")
+             "point_load", "body_force", "gravity", "surface", "geometry")
 SURFACE_TYPES = ("sphere", "cylinder")
 OBSTACLE_TYPES = ("plane", "sphere", "cylinder", "mesh")
 FRICTION_LAWS = ("frictionless", "coulomb", "tresca")
@@ -329,10 +329,15 @@ def read_model(path) -> Model:
 def _read_body(t: _Table, base: str):
     name = t.string("name", required=True)
     mesh_file = t.string("mesh", required=True)
+    geometry = t.string("geometry")
+    cad = None if geometry is None else _read_cad(t, _path(base, mesh_file), _path(base, geometry))
     try:
-        # meshio's Gmsh reader prints an empty line: a report on standard output (--json -) stays clean
-        with contextlib.redirect_stdout(io.StringIO()):
-            mesh = read_mesh(_path(base, mesh_file))
+        if cad is None:
+            # meshio's Gmsh reader prints an empty line: a report on standard output (--json -) stays clean
+            with contextlib.redirect_stdout(io.StringIO()):
+                mesh = read_mesh(_path(base, mesh_file))
+        else:
+            mesh = cad.mesh
     except ValueError as e:
         raise t.error("mesh", str(e)) from None
     levels = t.integer("levels", 1, 1, MAX_LEVELS)
@@ -381,6 +386,10 @@ def _read_body(t: _Table, base: str):
             raise t.error("gravity", "needs a density in the material" + ("" if isinstance(material, Material)
                                                                             else " of every region"))
     projector = _read_surfaces(t, mesh, mesh_file)
+    if cad is not None:
+        if projector is not None:
+            raise t.error("surface", "give the curved surfaces by the geometry or by [[body.surface]], not both")
+        projector = cad.projector()
     t.done()
     try:
         hierarchy = {"refine": lambda: MeshHierarchy.build(mesh, levels, projector=projector),
@@ -392,6 +401,22 @@ def _read_body(t: _Table, base: str):
     body = Body(hierarchy, material, dirichlet, body_force=body_force, traction=traction or None,
                 pressure=pressure or None, springs=springs or None, point_loads=point_loads, gravity=gravity)
     return body, BodyInfo(name, mesh_file, levels, hierarchy.finest, kind)
+
+
+def _read_cad(t: _Table, mesh_path: str, geometry_path: str):
+    """The CadModel of a body's gmsh mesh and the CAD (or .geo) file it was meshed from: its mesh, and
+    a projector that puts the new boundary nodes of every refinement on the CAD surfaces. It stays
+    open while the model lives (contact pairs measure their gaps on it)."""
+    from ..mesh.cad import CadModel
+
+    if not mesh_path.lower().endswith(".msh"):
+        raise t.error("geometry", f"goes with a gmsh .msh mesh made from it (gmsh matches the two by entity tags), "
+                                  f"got the mesh {os.path.basename(mesh_path)}")
+    try:
+        with contextlib.redirect_stdout(io.StringIO()):
+            return CadModel(mesh_path, geometry=geometry_path)
+    except ValueError as e:
+        raise t.error("geometry", str(e)) from None
 
 
 def _read_surfaces(t: _Table, mesh: Mesh, mesh_file: str):

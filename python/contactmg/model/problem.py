@@ -784,7 +784,7 @@ class Problem:
         self._levels_below = len(below)
         made = (f"{len(below)} coarser levels were made from it by geometric coarsening, down to "
                 f"{below[0].shape[1] * coarse.dim:,} dofs")
-        if dofs > MAX_COARSEST_DOFS:
+        if dofs > MAX_COARSEST_DOFS and not alone:
             note = (f"the coarse mesh has {dofs:,} dofs, more than the coarsest level's direct solve should take "
                     f"({MAX_COARSEST_DOFS:,}): {made}")
             warnings.warn(note, UserWarning, stacklevel=4)
