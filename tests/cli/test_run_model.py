@@ -783,6 +783,7 @@ normal = [0.0, -1.0]
         return np.concatenate(out)
 
     cad = read_model(tmp_path / "cad.toml")
+    assert not gmsh.isInitialized()  # the CAD model is closed once the problem is built
     assert len(corner_radii(cad.problem.mesh)) > 20 and corner_radii(cad.problem.mesh).max() < 1e-9
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")

@@ -266,6 +266,17 @@ def _path(base: str, p: str) -> str:
 # -- the model ------------------------------------------------------------------------------------
 def read_model(path) -> Model:
     """Read the model file `path` (TOML) into a Model; a ModelError names what is wrong."""
+    # the CAD models of bodies with a geometry, closed once the problem is built (their gmsh models
+    # are loaded again should a projection be needed later)
+    cads: list = []
+    try:
+        return _read_model(path, cads)
+    finally:
+        for cad in cads:
+            cad.close()
+
+
+def _read_model(path, cads: list) -> Model:
     path = os.fspath(path)
     file = path
     if not os.path.exists(path):
@@ -288,7 +299,7 @@ def read_model(path) -> Model:
     bodies, infos = [], []
     names: Dict[str, int] = {}
     for k, t in enumerate(body_tables):
-        body, info = _read_body(_Table(file, f"body[{k}]", t, BODY_KEYS), base)
+        body, info = _read_body(_Table(file, f"body[{k}]", t, BODY_KEYS), base, cads)
         if info.name in names:
             raise ModelError(file, f"body[{k}].name", f"the name {info.name!r} is taken by body[{names[info.name]}]")
         names[info.name] = k
@@ -326,11 +337,13 @@ def read_model(path) -> Model:
     return Model(path, problem, options, steps, outputs, infos, friction_info, description)
 
 
-def _read_body(t: _Table, base: str):
+def _read_body(t: _Table, base: str, cads: list):
     name = t.string("name", required=True)
     mesh_file = t.string("mesh", required=True)
     geometry = t.string("geometry")
     cad = None if geometry is None else _read_cad(t, _path(base, mesh_file), _path(base, geometry))
+    if cad is not None:
+        cads.append(cad)
     try:
         if cad is None:
             # meshio's Gmsh reader prints an empty line: a report on standard output (--json -) stays clean
