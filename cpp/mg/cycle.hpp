@@ -104,7 +104,7 @@ class CoarseCycle {
     // restricted fine residual after w = P~ c, Galerkin). One visit left the error of a single
     // coarse cycle in every fine correction: on Kuhn tetrahedra the linear rate then saturates
     // at 0.52 (V) or 0.40 (W below the fine level only) instead of the two-grid 0.31
-    // (benchmarks/tet_twogrid.py).
+    // (the exact two-grid rate: tests/core/test_tet_two_grid.py).
     if (opt.cycle != CycleType::V) cycle(opt, top, opt.cycle == CycleType::F ? CycleType::V : CycleType::W);
     if (add) prolongate_add<d>(P, mask, C.x.data(), w);
     else prolongate<d>(P, mask, C.x.data(), w);

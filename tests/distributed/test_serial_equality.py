@@ -1,6 +1,6 @@
 """The serial solver in the hashed order (ordering="hashed") against the distributed solve on one
 rank (SerialComm, in this process): the same colours on every level, the same cycle counts and the
-same displacement to round-off (0030-distributed-cycle, "Same answers as the serial solver")."""
+same displacement to round-off (0030-distributed-cycle, "The measurement that decided it")."""
 import numpy as np
 import pytest
 

@@ -2,7 +2,7 @@
 problem that releases its hierarchy once the core solver is built solves to the same bits, and its
 results, VTU output and contact check need nothing of what was released; the released levels come
 back identical when asked for; the accounting by owner adds up. (The figures themselves come from
-benchmarks/parallel_bandwidth.py memory: no timed or sized test here.)"""
+benchmarks/performance/memory.py: no timed or sized test here.)"""
 import json
 import subprocess
 import sys

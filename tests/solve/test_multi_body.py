@@ -220,11 +220,11 @@ def test_tied_correction_keeps_the_energy_decreasing():
 @pytest.mark.parametrize("E2,nu2", [(2000.0, 0.28), (4000.0, 0.2)])
 @pytest.mark.parametrize("method", ["nmg", "tnnmg"])
 def test_two_body_cycle_spread_over_four_levels(F, E2, nu2, method, request):
-    """The issue-13 target, spread <= 4 over levels 3-6, for nmg (with the tied correction) and
-    tnnmg, equal and unequal materials (benchmarks/two_body_levels.py)."""
+    """The target: a spread <= 4 over levels 3-6, for nmg (with the tied correction) and tnnmg,
+    equal and unequal materials (benchmarks/three_d/two_bodies.py)."""
     if method == "tnnmg" and (F, E2, nu2) == (0.4, 2000.0, 0.28):
         # a known shortfall, kept visible (XPASS once it is met): 5 / 7 / 8 / 10 steps, spread 5;
-        # the contact state settles after 2 steps on level 3 and 6 on level 7 (README, "Two bodies")
+        # the contact state settles after 2 steps on level 3 and 6 on level 7
         request.node.add_marker(pytest.mark.xfail(reason="TNNMG spread 5 > 4 on the equal cylinders at F = 0.4", strict=False))
     c = _cycles((3, 4, 5, 6), F, E2, nu2, method)
     assert max(c) - min(c) <= 4, c

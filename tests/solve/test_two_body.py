@@ -203,7 +203,7 @@ def test_two_body_hertz_against_the_formulas_level5():
     """E2 != E1: the half-width within one arc segment and the peak pressure within 10 % of the
     two-body formulas at level 5 by the contract's evaluations (last contact node, largest nodal
     multiplier), within 5 % by the ellipse fitted to all contact nodes (measured -3.9 % / +3.0 %;
-    the finest-level comparison is in the slow test and benchmarks/two_body_levels.py)."""
+    the finest-level comparison is in the slow test and benchmarks/three_d/two_bodies.py)."""
     p = cylinders_problem(levels=5, friction=0.0, E2=4000.0, nu2=0.2)
     r = p.solve()
     assert r.converged
@@ -291,7 +291,7 @@ def test_coarse_correction_rate_does_not_grow_with_the_level(F):
     problem with the contact state known stay level-independent (measured 0.22-0.36, 17-22
     cycles on levels 3-6). Algorithm 2's cycle counts do grow with E2 != E1 (17 -> 30 from level 3
     to 6): its restricted bounds hold back the common motion of the bodies at the zone edge
-    (two_body.py; tnnmg stays flat, tests/test_multi_body.py)."""
+    (benchmarks/three_d/two_bodies.py; tnnmg stays flat, tests/solve/test_multi_body.py)."""
     rates, linear = [], []
     for L in (3, 4, 5, 6):
         p = cylinders_problem(levels=L, friction=F, E2=4000.0, nu2=0.2)

@@ -107,7 +107,7 @@ def _float(name):
 
 
 def add_path_arguments(p) -> None:
-    """The load path options (cli_path.py runs them)."""
+    """The load path options (path.py runs them)."""
     p.add_argument("--steps", type=_positive_int("--steps", 1, 100000), default=None,
                    help="load path: the loading in N equal increments (incremental Coulomb law)")
     p.add_argument("--shear", type=_float("--shear"), default=None,

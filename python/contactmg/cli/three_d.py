@@ -1,5 +1,5 @@
 """The 3D commands `contactmg sphere` and `contactmg cork`, registered by
-cli.py; the JSON keys of `contactmg hertz` plus their own."""
+main.py; the JSON keys of `contactmg hertz` plus their own."""
 from __future__ import annotations
 
 import sys

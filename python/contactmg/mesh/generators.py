@@ -51,7 +51,7 @@ def hertz_half_disk(cell: str = "triangle", center=(0.0, 0.4), radius: float = 0
     polar mesh of 3 rings with 4k segments on ring k (28 nodes, angles 39-85 degrees); quads: a
     block of 8 x 4 quads under the centre and 3 layers of 16 quads out to the arc (96 nodes,
     angles 60-135 degrees). Both were chosen among candidates by the contraction rate of the
-    linear multigrid (benchmarks/linear_multigrid.py): coarse cells of poor aspect ratio near the
+    linear multigrid (benchmarks/methods/linear_multigrid.py): coarse cells of poor aspect ratio near the
     arc cost a lot (0.51 instead of 0.32 per V(3,3) cycle at level 7). Tags: HERTZ_ARC on the arc,
     HERTZ_TOP on the top edge. A node sits at the bottom point; the mesh is symmetric about
     x = center_x."""

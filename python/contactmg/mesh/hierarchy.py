@@ -170,7 +170,7 @@ class MeshHierarchy:
         self._levels = 0
 
     def __setstate__(self, state: dict) -> None:
-        # a hierarchy pickled when this was a dataclass (benchmarks/cycle_growth.py caches one)
+        # a hierarchy pickled when this was a dataclass (older scripts cached one)
         if "meshes" in state:
             state["_meshes"], state["_transfers"] = state.pop("meshes"), state.pop("transfers")
         for key, default in (("_recipe", None), ("_finest", None), ("_levels", 0), ("bisection_marks", None),
@@ -266,7 +266,7 @@ class MeshHierarchy:
         (mesh/coarsening.py): nested node sets chosen from the mesh's nodes, the boundary's edges
         and corners first, interpolated by barycentric coordinates in their Delaunay simplices,
         down to at most `coarsest` nodes. For a mesh as it comes from a mesher, with no coarse
-        mesh to refine; the default of a fine mesh alone (0028-geometric-coarsening). The
+        mesh to refine; the default of a fine mesh alone (0029-geometric-coarsening). The
         hierarchy holds the fine mesh and the transfers (kind "coarsening")."""
         from .coarsening import coarsening_prolongations
 
