@@ -27,6 +27,7 @@
 #include "solver/monitor.hpp"
 #include "steps/fine_iterate.hpp"
 #include "steps/frozen_line_search.hpp"
+#include "steps/iterate_checks.hpp"
 #include "steps/monotone_mg_step.hpp"
 #include "steps/nonlinear_gauss_seidel.hpp"
 
@@ -48,7 +49,7 @@ class TnnmgStep {
             FineIterate<d>& it, const SolverOptions& opt, TruncatedLinearCycle<d>& fine_cycle,
             const SweepOrder& fine_order = SweepOrder())
       : P_(P), H_(H), C_(C), built_(built), it_(it), opt_(opt), lin_(fine_cycle), order_(fine_order),
-        checks_(P, H, C, built, it, opt, fine_order) {
+        checks_(P, it, fine_order) {
     const Index n = P.num_nodes() * d;
     mask_ = P.base_mask();
     r_.assign(n, 0.0); w_.assign(n, 0.0); Aw_.assign(n, 0.0); old_.assign(n, 0.0); tmp_.assign(n, 0.0);
@@ -91,8 +92,9 @@ class TnnmgStep {
     rec.frozen_decrease = decrease_;
     rec.linear_iterations = linear_iterations_;
   }
-  double error_against(const double* ref) { return checks_.error_against(ref); }
-  double sweep_change() { return checks_.sweep_change(); }
+  double error_against(const double* ref) const { return checks_.error_against(ref); }
+  // old_ and tmp_ are free after a cycle
+  double sweep_change() { return checks_.sweep_change(old_, tmp_); }
 
  private:
   // mask, bounds, friction gradient into r_, Hessian blocks, and the frozen bounds s_
@@ -184,9 +186,8 @@ class TnnmgStep {
   FineIterate<d>& it_;
   SolverOptions opt_;
   TruncatedLinearCycle<d>& lin_;
-  // energy record, error and the sweep check are the monotone step's (same iterate, same law)
   const SweepOrder& order_;  // of the fine nonlinear sweeps
-  MonotoneMultigridStep<d, L> checks_;
+  IterateChecks<d, L> checks_;  // the record's energy and counts, the error, the sweep check
   FrozenLineSearch<d> ls_;
   std::vector<std::uint8_t> mask_;
   std::vector<double> r_, w_, Aw_, old_, tmp_, lo_, hi_, s_;
