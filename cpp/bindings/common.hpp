@@ -10,7 +10,7 @@
 #include <vector>
 #include "base/exact_sum.hpp"
 #include "mg/line_smoother.hpp"
-#include "solver/solve_result.hpp"
+#include "base/solve_result.hpp"
 
 namespace cmg::bindings {
 

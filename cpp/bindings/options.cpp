@@ -1,5 +1,5 @@
 // The options dict of the solver's constructor and solve(): the field names of SolverOptions
-// (solver/solver_options.hpp), each value checked for its type here and for its range by
+// (base/solver_options.hpp), each value checked for its type here and for its range by
 // SolverOptions::validate().
 #include <algorithm>
 #include <limits>

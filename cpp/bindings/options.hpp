@@ -1,7 +1,7 @@
 // The solver options as a Python dict and back (bindings/options.cpp).
 #pragma once
 #include "bindings/common.hpp"
-#include "solver/solver_options.hpp"
+#include "base/solver_options.hpp"
 
 namespace cmg::bindings {
 

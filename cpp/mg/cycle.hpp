@@ -8,7 +8,7 @@
 #include "mg/bound_restriction.hpp"
 #include "mg/hierarchy.hpp"
 #include "mg/line_smoother.hpp"
-#include "solver/solver_options.hpp"
+#include "base/solver_options.hpp"
 
 namespace cmg {
 

@@ -11,61 +11,10 @@
 #include <cmath>
 #include <cstring>
 #include <memory>
-#include "mg/coarsest_solver.hpp"
-#include "mg/level_smoothers.hpp"
-#include "mg/sweep_order.hpp"
+#include "mg/distributed_levels.hpp"
 
 namespace cmg {
 
-// A coarse level's rows on one rank (owned rows complete, ghost rows empty) and their smoother: the
-// matrix is held once, written in place by the Galerkin kernel, swept by block or projected
-// Gauss-Seidel with the inverted diagonal blocks of level_smoothers.hpp.
-template <int d>
-struct CoarseRows {
-  BlockMatrix<d> A;
-  std::vector<double> Dinv;
-  std::vector<std::uint8_t> inert;
-  std::vector<std::uint8_t> changed;  // per row: its values changed in the last Galerkin pass
-  double inverted_scale = -1;         // the scale of the inverses held (-1: none)
-
-  Index n() const { return A.rows; }
-
-  // The largest diagonal entry of the rows flagged in `owned` (the caller takes the maximum over the ranks).
-  double max_diagonal(const std::uint8_t* owned) const {
-    double m = 0.0;
-    for (Index i = 0; i < A.rows; ++i)
-      if (owned[i] && A.diag[i] >= 0)
-        for (int c = 0; c < d; ++c) m = std::max(m, A.block(A.diag[i])(c, c));
-    return m;
-  }
-
-  // The diagonal inverses for a level-wide `scale` (the inert threshold is relative to it, so a
-  // changed scale touches every row); with the scale of the inverses held, only the rows the last
-  // Galerkin pass changed (a row's inverse reads only its own diagonal block: the same bits).
-  void invert(double scale) {
-    const bool all = scale != inverted_scale || Dinv.size() != (std::size_t)(A.rows * d * d) || changed.size() != (std::size_t)A.rows;
-    if (all) invert_diagonal<d>(A, Dinv, inert, scale);
-    else
-      for (Index i = 0; i < A.rows; ++i)
-        if (changed[i]) invert_diagonal<d>(A, Dinv, inert, scale, i, i + 1);
-    inverted_scale = scale;
-  }
-
-  // r_i = b_i - sum_k A_ik x_k on the rows flagged in `owned` (blocks in ascending column), zero elsewhere.
-  void residual(const double* x, const double* b, const std::uint8_t* owned, double* r) const {
-    for (Index i = 0; i < A.rows; ++i) {
-      double* ri = r + d * i;
-      if (!owned[i]) { std::fill(ri, ri + d, 0.0); continue; }
-      for (int c = 0; c < d; ++c) ri[c] = b[d * i + c];
-      accumulate_blocks<d, true>(A.values.data(), A.indices.data(), A.indptr[i], A.indptr[i + 1], x, ri);
-    }
-  }
-
-  std::size_t bytes() const {
-    return A.indptr.size() * sizeof(Index) + A.indices.size() * sizeof(ColIndex) + A.values.size() * sizeof(double) +
-           A.diag.size() * sizeof(Index) + Dinv.size() * sizeof(double) + inert.size() + changed.size();
-  }
-};
 
 // The transfer P onto the local fine nodes (rows; ghost rows are their owners' rows) from the local
 // coarse nodes (columns), and the Galerkin rows it forms on the coarse level: for each owned coarse
@@ -93,7 +42,7 @@ class DistributedTransfer {
     w_.assign(P.nnz(), 0.0);
     for (Index i = 0; i < rows_; ++i) {
       bool plain = true;
-      for (Index k = ptr_[i]; k < ptr_[i + 1] && plain; ++k) plain = is_scaled_identity(P.block(k));
+      for (Index k = ptr_[i]; k < ptr_[i + 1] && plain; ++k) plain = is_scaled_identity<d>(P.block(k));
       if (plain) {
         for (Index k = ptr_[i]; k < ptr_[i + 1]; ++k) w_[k] = P.block(k)(0, 0);
         continue;
@@ -302,7 +251,7 @@ class DistributedTransfer {
         }
         for (Index k = 0; k < len; ++k) {
           MatMap<d> Cb(row.data() + pos[zcol[k]] * d * d);
-          multiply_add(PT, CMatMap<d>(zval + k * d * d), Cb);
+          multiply_add<d>(PT, CMatMap<d>(zval + k * d * d), Cb);
         }
       }
       double* stored = C.A.values.data() + c0 * d * d;
@@ -429,13 +378,6 @@ class DistributedTransfer {
  private:
   Index nnz() const { return (Index)col_.size(); }
 
-  static bool is_scaled_identity(const Mat<d>& B) {
-    for (int a = 0; a < d; ++a)
-      for (int c = 0; c < d; ++c)
-        if (a == c ? std::memcmp(&B(a, a), &B(0, 0), sizeof(double)) != 0 : B(a, c) != 0.0) return false;
-    return true;
-  }
-
   // the full blocks of row i (nullptr: a plain row, w I)
   const double* full_row(Index i) const { return full_at_.empty() || full_at_[i] < 0 ? nullptr : full_.data() + full_at_[i] * d * d; }
 
@@ -446,18 +388,6 @@ class DistributedTransfer {
     Mat<d> B = Mat<d>::Zero();
     for (int a = 0; a < d; ++a) B(a, a) = w_[k];
     return B;
-  }
-
-  // Y += X B, the products of each entry summed over the inner index in ascending order (fixed code,
-  // so the same bits on every rank).
-  template <class MX, class MB, class MY>
-  static void multiply_add(const MX& X, const MB& B, MY& Y) {
-    for (int a = 0; a < d; ++a)
-      for (int c = 0; c < d; ++c) {
-        double t = X(a, 0) * B(0, c);
-        for (int e = 1; e < d; ++e) t += X(a, e) * B(e, c);
-        Y(a, c) += t;
-      }
   }
 
   void check_fine(const BlockMatrix<d>& A) const {
@@ -497,7 +427,7 @@ class DistributedTransfer {
       if (Y.isZero(0.0)) continue;
       for (Index b = ptr_[j]; b < ptr_[j + 1]; ++b) {
         MatMap<d> Zb(vals.data() + slot[col_[b]] * d * d);
-        multiply_add(Y, block(j, b), Zb);
+        multiply_add<d>(Y, block(j, b), Zb);
       }
     }
     for (ColIndex J : cols) slot[J] = -1;
@@ -560,72 +490,6 @@ class DistributedTransfer {
   };
   std::vector<Given> given_;                     // the ghost rows as sent: node, blocks, whether held
   bool inputs_set_ = false, ghost_pattern_done_ = false;
-};
-
-// The coarsest level gathered onto every rank (the same matrix everywhere), factorized by the
-// core's sparse LDL^T and kept current across rebuilds by the serial solver's low-rank correction
-// (mg/coarsest_solver.hpp). SuperLU took 60 ms a factorization on the half ball's coarsest level
-// (2,286 dofs), most of a rebuild once the Galerkin rows were in C++. Every step here is serial and
-// in a fixed order, and every rank sees the same sequence of matrices: the solutions have the same
-// bits on every rank (they depend on that sequence, as the serial solver's do). The factorization
-// rule is the serial GalerkinHierarchy::factorize's (mg/hierarchy.hpp): each pivot against its own
-// row's diagonal entry, and a matrix that truncation through rotated frames leaves semi-definite is
-// shifted by 1e-10 diag.
-class GatheredCoarsestFactor {
- public:
-  using SpMat = Eigen::SparseMatrix<double>;
-  using LDLT = Eigen::SimplicialLDLT<SpMat>;
-
-  // S: scalar CSR (n x n, symmetric to round-off), the rows and columns of the inert dofs (per dof,
-  // nonzero: inert) replaced by identity rows, as the serial hierarchy does. may_update: a low-rank
-  // correction of the kept factorization is allowed (false: factorize).
-  void set(Index n, const Index* indptr, const Index* indices, const double* values, const std::uint8_t* inert, bool may_update) {
-    std::vector<Eigen::Triplet<double>> t;
-    t.reserve(indptr[n] + n);
-    for (Index i = 0; i < n; ++i) {
-      if (inert[i]) { t.emplace_back(i, i, 1.0); continue; }
-      for (Index k = indptr[i]; k < indptr[i + 1]; ++k) {
-        const Index j = indices[k];
-        if (j < 0 || j >= n) throw InputError("a coarsest-level column is out of range");
-        if (values[k] != 0 && !inert[j]) t.emplace_back(i, j, values[k]);
-      }
-    }
-    SpMat S(n, n);
-    S.setFromTriplets(t.begin(), t.end());
-    n_ = n;
-    solver_.set(std::move(S), may_update, [&](SpMat& M, LDLT& f) { return factorize(M, f); });
-  }
-
-  Index n() const { return n_; }
-  bool shifted() const { return shifted_; }
-  int factorizations() const { return solver_.factorizations(); }
-
-  void solve(const double* b, double* x) {
-    solver_.solve(b, x, [&](SpMat& M, LDLT& f) { return factorize(M, f); });
-  }
-
-  // the kept matrices and low-rank columns, and the factor (a value and a row index an entry)
-  std::size_t bytes() const { return solver_.memory_bytes() + factor_entries_ * (sizeof(double) + sizeof(int)) + n_ * 3 * sizeof(double); }
-
- private:
-  int factorize(SpMat& S, LDLT& f) {
-    const Eigen::VectorXd diag = S.diagonal();
-    f.compute(S);  // its lower triangle
-    shifted_ = false;
-    if (!ldlt_pivots_ok(f, diag)) {
-      for (Index k = 0; k < S.rows(); ++k) S.coeffRef(k, k) *= 1 + 1e-10;
-      f.compute(S);
-      shifted_ = true;
-      if (!ldlt_pivots_ok(f, diag)) throw InputError("the coarsest-level matrix is singular: is rigid-body motion left free by the Dirichlet conditions?");
-    }
-    factor_entries_ = (std::size_t)f.matrixL().nestedExpression().nonZeros();
-    return shifted_ ? 2 : 1;
-  }
-
-  CoarsestSolver solver_;
-  Index n_ = 0;
-  std::size_t factor_entries_ = 0;
-  bool shifted_ = false;
 };
 
 }  // namespace cmg

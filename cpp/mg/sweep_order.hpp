@@ -9,7 +9,7 @@
 #include "base/block_matrix.hpp"
 #include "base/hashed_priority.hpp"
 #include "base/parallel.hpp"
-#include "solver/solver_options.hpp"
+#include "base/solver_options.hpp"
 
 namespace cmg {
 

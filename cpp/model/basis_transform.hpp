@@ -4,7 +4,6 @@
 // elsewhere; the dual mortar basis of two-body contact will be a sparse T of the same role.
 #pragma once
 #include "base/block_matrix.hpp"
-#include "mg/prolongation.hpp"
 
 namespace cmg {
 
@@ -40,8 +39,10 @@ class BasisTransform {
       }
     }
   }
-  // P <- T^{-1} P for a prolongation onto this level (rows are the nodes of T)
-  void transform_prolongation(Prolongation<d>& P) const {
+  // P <- T^{-1} P for a prolongation onto this level (rows are the nodes of T; any type with
+  // rotate_row(row, R), mg/prolongation.hpp's)
+  template <class Prolongation>
+  void transform_prolongation(Prolongation& P) const {
     for (std::size_t c = 0; c < nodes_.size(); ++c) P.rotate_row(nodes_[c], Q_[c].transpose());
   }
   // v <- T^T v (a load; and, T being orthogonal, canonical -> local coordinates)

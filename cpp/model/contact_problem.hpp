@@ -8,7 +8,6 @@
 #include "model/basis_transform.hpp"
 #include "model/contact_frames.hpp"
 #include "laws/contact_node.hpp"
-#include "mg/level_smoothers.hpp"
 
 namespace cmg {
 

@@ -5,7 +5,7 @@
 #pragma once
 #include <memory>
 #include "laws/law.hpp"
-#include "steps/fixed_point_step.hpp"
+#include "solver/fixed_point_solver.hpp"
 #include "mg/renumbering.hpp"
 #include "steps/tnnmg_step.hpp"
 

@@ -10,8 +10,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include "solver/monitor.hpp"
-#include "solver/solver_options.hpp"
+#include "base/monitor.hpp"
+#include "base/solver_options.hpp"
 
 namespace cmg {
 

@@ -7,7 +7,7 @@
 #include <cmath>
 #include <limits>
 #include <vector>
-#include "solver/solve_result.hpp"
+#include "base/solve_result.hpp"
 #include "steps/fine_iterate.hpp"
 #include "steps/nonlinear_gauss_seidel.hpp"
 

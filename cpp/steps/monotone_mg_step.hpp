@@ -10,7 +10,7 @@
 // the Petrov-Galerkin coupling, petrov_galerkin_coupling.hpp).
 #pragma once
 #include "mg/cycle.hpp"
-#include "solver/monitor.hpp"
+#include "base/monitor.hpp"
 #include "steps/fine_iterate.hpp"
 #include "steps/iterate_checks.hpp"
 #include "steps/petrov_galerkin_coupling.hpp"

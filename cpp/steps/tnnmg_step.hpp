@@ -24,7 +24,7 @@
 #include "mg/cycle.hpp"
 #include "mg/pcg.hpp"
 #include "mg/truncated_linear_cycle.hpp"
-#include "solver/monitor.hpp"
+#include "base/monitor.hpp"
 #include "steps/fine_iterate.hpp"
 #include "steps/frozen_line_search.hpp"
 #include "steps/iterate_checks.hpp"

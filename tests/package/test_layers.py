@@ -73,3 +73,34 @@ def test_no_import_cycle():
         if n not in state:
             visit(n)
     assert len(state) == len(GRAPH) > 30
+
+
+CPP = PKG.parents[1] / "cpp"
+CPP_LAYERS = ["base", "fem", "laws", "model", "mg", "steps", "solver", "bindings"]
+MAX_CPP_LINES = 500
+
+
+def cpp_sources():
+    return sorted(p for p in CPP.rglob("*") if p.suffix in (".hpp", ".cpp"))
+
+
+def test_every_cpp_folder_is_a_known_layer():
+    assert {p.parent.name for p in cpp_sources()} <= set(CPP_LAYERS)
+
+
+@pytest.mark.parametrize("path", cpp_sources(), ids=lambda p: f"{p.parent.name}/{p.name}")
+def test_a_cpp_file_includes_only_its_own_layer_and_those_below(path):
+    """cpp/README.md's order: base, fem, laws, model, mg, steps, solver, bindings; a folder includes
+    from itself and the folders before it, with no exception."""
+    own = CPP_LAYERS.index(path.parent.name)
+    for line in path.read_text().splitlines():
+        if line.startswith('#include "'):
+            target = line.split('"')[1]
+            layer = target.split("/")[0]
+            assert layer in CPP_LAYERS, (path, target)
+            assert CPP_LAYERS.index(layer) <= own, f"{path.parent.name}/{path.name} includes {target}"
+
+
+@pytest.mark.parametrize("path", cpp_sources(), ids=lambda p: f"{p.parent.name}/{p.name}")
+def test_no_cpp_file_is_over_500_lines(path):
+    assert len(path.read_text().splitlines()) <= MAX_CPP_LINES

@@ -1,5 +1,5 @@
 """The solver's options: one frozen dataclass mirroring the core's SolverOptions
-(cpp/solver/solver_options.hpp), validated once, and the one function that fills the defaults that
+(cpp/base/solver_options.hpp), validated once, and the one function that fills the defaults that
 depend on the problem."""
 from __future__ import annotations
 

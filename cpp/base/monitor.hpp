@@ -3,7 +3,7 @@
 #pragma once
 #include <chrono>
 #include <functional>
-#include "solver/solve_result.hpp"
+#include "base/solve_result.hpp"
 
 namespace cmg {
 
