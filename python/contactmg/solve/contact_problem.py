@@ -16,14 +16,14 @@ from .options import PAPER_TOL, SolverOptions
 # The solve defaults of the aliases, which the replacement takes from with_cycle
 _CYCLE_DEFAULTS = ("; the solve defaults of the alias (method 'nmg', its cycle, tol 1e-11) are "
                    "contactmg.solve.options.with_cycle(problem, cycle, nu1, nu2)")
-CONTACT_PROBLEM_DEPRECATED = (
+_CONTACT_PROBLEM_DEPRECATED = (
     "contactmg.ContactProblem is deprecated and will be removed in the next release: use "
     "contactmg.Problem(contactmg.Body(hierarchy, material, dirichlet, contact_tags, body_force, traction), "
     "obstacle=obstacle, friction=friction)" + _CYCLE_DEFAULTS)
-MULTI_BODY_PROBLEM_DEPRECATED = (
+_MULTI_BODY_PROBLEM_DEPRECATED = (
     "contactmg.MultiBodyProblem is deprecated and will be removed in the next release: use "
     "contactmg.Problem(bodies, pairs=pairs, friction=friction, tied_correction=tied_correction)" + _CYCLE_DEFAULTS)
-TWO_BODY_PROBLEM_DEPRECATED = (
+_TWO_BODY_PROBLEM_DEPRECATED = (
     "contactmg.TwoBodyProblem is deprecated and will be removed in the next release: use "
     "contactmg.Problem(bodies, pairs=pair, friction=friction, tied_correction=tied_correction)" + _CYCLE_DEFAULTS)
 
@@ -39,7 +39,7 @@ class ContactProblem(Problem):
                  body_force: Optional[VectorField] = None, traction: Optional[Dict[int, VectorField]] = None,
                  cycle: str = "F", nu1: int = 3, nu2: int = 3):
         # stacklevel 2: the warning names the line that made the alias
-        warnings.warn(CONTACT_PROBLEM_DEPRECATED, DeprecationWarning, stacklevel=2)
+        warnings.warn(_CONTACT_PROBLEM_DEPRECATED, DeprecationWarning, stacklevel=2)
         self.default_options = SolverOptions(method="nmg", cycle=cycle, nu1=nu1, nu2=nu2, tol=PAPER_TOL)
         super().__init__(Body(hierarchy, material, dirichlet, contact_tags, body_force, traction), obstacle, friction)
 
@@ -50,7 +50,7 @@ class MultiBodyProblem(Problem):
 
     def __init__(self, bodies: Sequence[Body], pairs: Sequence[ContactPair], friction=None, cycle: str = "F",
                  nu1: int = 3, nu2: int = 3, tied_correction: bool = True):
-        warnings.warn(MULTI_BODY_PROBLEM_DEPRECATED, DeprecationWarning, stacklevel=2)
+        warnings.warn(_MULTI_BODY_PROBLEM_DEPRECATED, DeprecationWarning, stacklevel=2)
         self._build(bodies, pairs, friction, cycle, nu1, nu2, tied_correction)
 
     def _build(self, bodies, pairs, friction, cycle, nu1, nu2, tied_correction) -> None:
@@ -67,7 +67,7 @@ class TwoBodyProblem(MultiBodyProblem):
     def __init__(self, bodies: Sequence[Body], pair: ContactPair, friction=None, cycle: str = "F", nu1: int = 3,
                  nu2: int = 3, tied_correction: bool = True):
         # its own warning (not MultiBodyProblem's): one warning, naming this alias and the caller's line
-        warnings.warn(TWO_BODY_PROBLEM_DEPRECATED, DeprecationWarning, stacklevel=2)
+        warnings.warn(_TWO_BODY_PROBLEM_DEPRECATED, DeprecationWarning, stacklevel=2)
         if not isinstance(pair, ContactPair) and not (isinstance(pair, (list, tuple))
                                                       and all(isinstance(q, ContactPair) for q in pair)):
             raise TypeError("pair must be a ContactPair")
