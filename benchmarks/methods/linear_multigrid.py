@@ -20,6 +20,7 @@ from _common import parser, write_result  # noqa: E402
 import contactmg as cm  # noqa: E402
 from contactmg.examples import cork  # noqa: E402
 from contactmg.mesh.quality import dihedral_angles, radius_ratio, scaled_jacobian  # noqa: E402
+from contactmg.solve.options import with_cycle  # noqa: E402
 from contactmg.solve.solver import Solver
 
 
@@ -80,7 +81,7 @@ def rows_of(geometries, cells, levels, cycles, count):
                 if dim == 3:
                     row.update(quality(sub.finest))
                 for c in cycles:
-                    p = cm.ContactProblem(sub, mat, bcs, cycle=c[0], nu1=int(c[1]), nu2=int(c[2]))
+                    p = with_cycle(cm.Problem(cm.Body(sub, mat, bcs)), c[0], int(c[1]), int(c[2]))
                     t0 = time.perf_counter()
                     p.solver.core  # noqa: B018 - builds the coarse hierarchy
                     row.setdefault("setup_seconds", time.perf_counter() - t0 + (build if L == levels[1] else 0.0))

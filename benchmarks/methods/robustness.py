@@ -30,22 +30,26 @@ from _common import parser, write_result  # noqa: E402
 import contactmg as cm  # noqa: E402
 from contactmg.results.checks import VIOLATION_TOL, contact_conditions  # noqa: E402
 from contactmg.examples.hertz import hertz_adaptive_hierarchy, hertz_problem  # noqa: E402
+from contactmg.solve.options import with_cycle  # noqa: E402
 
 
 def hertz_scene(h, F=0.4, nu=0.28, push=-0.005, plane_y=0.0):
     """The Hertz half disk on hierarchy h with another material, push or obstacle position."""
-    return cm.ContactProblem(h, cm.Material(2000.0, nu), [cm.Dirichlet([cm.HERTZ_TOP], (0.0, push))],
-                             contact_tags=[cm.HERTZ_ARC], obstacle=cm.PlaneObstacle((0.0, plane_y), (0.0, -1.0)),
-                             friction=cm.Coulomb(F) if F > 0 else cm.Frictionless())
+    # the solve defaults of the recorded results: nmg F(3,3), the absolute stop 1e-11
+    return with_cycle(cm.Problem(cm.Body(h, cm.Material(2000.0, nu), [cm.Dirichlet([cm.HERTZ_TOP], (0.0, push))],
+                                         contact_tags=[cm.HERTZ_ARC]),
+                                 obstacle=cm.PlaneObstacle((0.0, plane_y), (0.0, -1.0)),
+                                 friction=cm.Coulomb(F) if F > 0 else cm.Frictionless()))
 
 
 def layer(aspect, level=5):
     """4 x 4 quads of aspect ratio `aspect` (long and flat), refined, pressed and sheared with
     friction onto the rigid plane."""
     h = cm.MeshHierarchy.build(cm.rectangle(4, 4, lx=aspect * 1.0, ly=1.0, cell="quad"), level)
-    return cm.ContactProblem(h, cm.Material(100.0, 0.3), [cm.Dirichlet([cm.RECT_TOP], (0.01, -0.01))],
-                             contact_tags=[cm.RECT_BOTTOM], obstacle=cm.PlaneObstacle((0.0, 0.0), (0.0, -1.0)),
-                             friction=cm.Coulomb(0.3))
+    # the solve defaults of the recorded results: nmg F(3,3), the absolute stop 1e-11
+    return with_cycle(cm.Problem(cm.Body(h, cm.Material(100.0, 0.3), [cm.Dirichlet([cm.RECT_TOP], (0.01, -0.01))],
+                                         contact_tags=[cm.RECT_BOTTOM]),
+                                 obstacle=cm.PlaneObstacle((0.0, 0.0), (0.0, -1.0)), friction=cm.Coulomb(0.3)))
 
 
 def rate(c):

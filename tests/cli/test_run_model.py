@@ -578,6 +578,26 @@ def _solve_text(tmp_path, capsys, name, text):
     return json.loads((tmp_path / f"{name}.json").read_text()), meshio.read(tmp_path / f"{name}.vtu")
 
 
+def test_load_steps_without_a_method_take_the_load_paths_default(tmp_path, capsys):
+    """steps.count > 1 and no solver.method: the load path's default for the problem (that of a
+    single solve): nmg on the block, the same steps as the file that names it; and nmg where a single
+    solve would take tnnmg (nu = 0.49), which takes no slip origin."""
+    d = example("block_2d", tmp_path)
+    text = (d / "block.toml").read_text().replace("pvd = ", "# pvd = ").replace("plot = ", "# plot = ")
+    assert 'method = "nmg"\n' in text
+    named, _ = _solve_text(d, capsys, "named", text)
+    plain, vtu_plain = _solve_text(d, capsys, "plain", text.replace('method = "nmg"\n', ""))
+    assert plain["method"] == named["method"] == "nmg" and plain["converged"]
+    assert plain["cycles_per_step"] == named["cycles_per_step"]
+    stiff = text.replace('method = "nmg"\n', "").replace("nu = 0.3 }", "nu = 0.49 }")
+    assert stiff.count("nu = 0.49") == 1
+    rep, _ = _solve_text(d, capsys, "stiff", stiff)
+    assert rep["method"] == "nmg" and rep["converged"] and len(rep["steps"]) == 5
+    from contactmg.solve.options import resolve_options
+
+    assert resolve_options(read_model(d / "stiff.toml").problem).method == "tnnmg"
+
+
 def test_a_2d_cylinder_is_the_circle_and_a_flat_surface_mesh_the_plane(tmp_path, capsys):
     d = example("block_2d", tmp_path)
     text = (d / "block.toml").read_text().replace("pvd = ", "# pvd = ").replace("plot = ", "# plot = ")

@@ -8,7 +8,7 @@ from contactmg.mesh.generators_3d import box
 from contactmg.mesh.hierarchy import MeshHierarchy
 from contactmg.model.material import Material
 from contactmg.mesh.mesh import Mesh
-from contactmg.solve.contact_problem import ContactProblem, Dirichlet
+from contactmg.model.problem import Body, Dirichlet, Problem
 
 MAT = Material(210.0, 0.3)
 ALL_SIDES = [1, 2, 3, 4, 5, 6]
@@ -78,7 +78,7 @@ def test_patch_test_reproduces_a_linear_displacement(cell):
     c = np.array([0.001, -0.002, 0.003])
     exact = lambda x: x @ Gu.T + c  # noqa: E731
     h = MeshHierarchy.build(distorted_box(cell), 2)
-    prob = ContactProblem(h, MAT, [Dirichlet(ALL_SIDES, exact)])
+    prob = Problem(Body(h, MAT, [Dirichlet(ALL_SIDES, exact)]))
     res = prob.solve(tol=1e-14)
     assert res.converged
     np.testing.assert_allclose(res.displacement, exact(prob.mesh.points), atol=1e-12)
@@ -136,7 +136,7 @@ def test_manufactured_solution_converges_at_order_h_in_energy_and_h2_in_L2():
     errors = []
     for levels in (2, 3, 4):
         sub = MeshHierarchy(h.meshes[:levels], h.transfers[:levels - 1])
-        prob = ContactProblem(sub, MAT, [Dirichlet(ALL_SIDES, u)], body_force=f)
+        prob = Problem(Body(sub, MAT, [Dirichlet(ALL_SIDES, u)], body_force=f))
         res = prob.solve(tol=1e-12)
         assert res.converged
         errors.append(_tet_errors(prob.mesh, res.displacement, u, grad, MAT))

@@ -66,8 +66,8 @@ def test_low_rank_coarsest_updates_are_thread_independent():
 
 
 CORK_PATH = ("import sys; from contactmg.cli.main import main; "
-             "from contactmg.solve.contact_problem import ContactProblem; "
-             "ContactProblem.rotated_frames = (lambda self: False) if {bounded} else ContactProblem.rotated_frames; "
+             "from contactmg.model.problem import Problem; "
+             "Problem.rotated_frames = (lambda self: False) if {bounded} else Problem.rotated_frames; "
              "sys.argv = ['contactmg', 'cork', '--levels', '2', '--steps', '2', '--json', '-', '-q']; main()")
 
 

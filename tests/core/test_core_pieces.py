@@ -12,7 +12,6 @@ from contactmg.mesh.hierarchy import MeshHierarchy
 from contactmg.model.material import Material
 from contactmg.mesh.mesh import CELL_DIM, CELL_NODES, FACET_NODES, _LOCAL_FACETS
 from contactmg.model.obstacle import PlaneObstacle
-from contactmg.solve.contact_problem import ContactProblem, Dirichlet
 from contactmg.solve.options import resolve_options
 
 INF = np.inf

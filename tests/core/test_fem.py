@@ -140,14 +140,14 @@ def manufactured(cell, levels):
         v = (lam + mu) * pi ** 2 * (s - c) + 2 * mu * pi ** 2 * s
         return np.c_[v, v]
 
-    from contactmg.solve.contact_problem import ContactProblem, Dirichlet
+    from contactmg.model.problem import Body, Dirichlet, Problem
 
     out = []
     base = rectangle(2, 2, cell=cell)
     hier = MeshHierarchy.build(base, levels)
     for L in range(2, levels + 1):
         sub = MeshHierarchy(hier.meshes[:L], hier.transfers[:L - 1])
-        prob = ContactProblem(sub, mat, [Dirichlet([1, 2, 3, 4], (0.0, 0.0))], body_force=f_ex)
+        prob = Problem(Body(sub, mat, [Dirichlet([1, 2, 3, 4], (0.0, 0.0))], body_force=f_ex))
         res = prob.solve(tol=1e-13)
         m = sub.finest
         uh = res.displacement

@@ -37,14 +37,15 @@ def _hertz_with(friction, contact=True):
     from contactmg.examples import hertz as H
     from contactmg.model.material import Material
     from contactmg.mesh.hierarchy import MeshHierarchy
-    from contactmg.solve.contact_problem import ContactProblem, Dirichlet
+    from contactmg.model.problem import Body, Dirichlet, Problem
     from contactmg.model.obstacle import PlaneObstacle
     h = MeshHierarchy.build(H.hertz_half_disk("triangle"), 5, projector=H.hertz_projector(H.CENTER, H.RADIUS))
-    kw = dict(contact_tags=[H.HERTZ_ARC], obstacle=PlaneObstacle((0.0, 0.0), (0.0, -1.0)), friction=friction) if contact else {}
     dirichlet = [Dirichlet([H.HERTZ_TOP], (0.0, H.TOP_DISPLACEMENT))]
     if not contact:  # hold the arc as well: a linear problem with a unique solution
         dirichlet.append(Dirichlet([H.HERTZ_ARC], (0.0, 0.0)))
-    return ContactProblem(h, Material(H.E, H.NU), dirichlet, **kw)
+        return Problem(Body(h, Material(H.E, H.NU), dirichlet))
+    return Problem(Body(h, Material(H.E, H.NU), dirichlet, contact_tags=[H.HERTZ_ARC]),
+                   obstacle=PlaneObstacle((0.0, 0.0), (0.0, -1.0)), friction=friction)
 
 
 CASES = {

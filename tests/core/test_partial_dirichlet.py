@@ -11,7 +11,7 @@ from contactmg.mesh.generators import RECT_BOTTOM, RECT_LEFT, RECT_TOP, rectangl
 from contactmg.mesh.hierarchy import MeshHierarchy
 from contactmg.model.material import Material
 from contactmg.model.obstacle import PlaneObstacle
-from contactmg.solve.contact_problem import ContactProblem, Dirichlet
+from contactmg.model.problem import Body, Dirichlet, Problem
 
 MAT = Material(1000.0, 0.3)
 PLANE = PlaneObstacle((0.0, 0.0), (0.0, -1.0))
@@ -27,8 +27,8 @@ def test_issue_reproduction_corner_does_not_penetrate():
     y = 0: the corner (0, 0) used to end at u_y = -2.3e-4 (gap 0) because it was dropped from the
     contact set; it is a contact node now and stays on the obstacle."""
     h = MeshHierarchy.build(rectangle(4, 4, 1, 1), 5)
-    p = ContactProblem(h, MAT, [Dirichlet([RECT_TOP], PUSH), Dirichlet([RECT_LEFT], (0.0, None))],
-                       contact_tags=[RECT_BOTTOM], obstacle=PLANE)
+    p = Problem(Body(h, MAT, [Dirichlet([RECT_TOP], PUSH), Dirichlet([RECT_LEFT], (0.0, None))],
+                     contact_tags=[RECT_BOTTOM]), obstacle=PLANE)
     r = p.solve()
     assert r.converged, r.status
     k = corner(p.mesh)
@@ -51,11 +51,11 @@ def _mirror_full(cell, n):
 def test_half_model_equals_full_model(cell, friction):
     levels = 4
     full_mesh, half_mesh = _mirror_full(cell, 4), rectangle(4, 4, 1.0, 1.0, cell)
-    full = ContactProblem(MeshHierarchy.build(full_mesh, levels), MAT, [Dirichlet([RECT_TOP], PUSH)],
-                          contact_tags=[RECT_BOTTOM], obstacle=PLANE, friction=friction)
-    half = ContactProblem(MeshHierarchy.build(half_mesh, levels), MAT,
-                          [Dirichlet([RECT_TOP], PUSH), Dirichlet([RECT_LEFT], (0.0, None))],
-                          contact_tags=[RECT_BOTTOM], obstacle=PLANE, friction=friction)
+    full = Problem(Body(MeshHierarchy.build(full_mesh, levels), MAT, [Dirichlet([RECT_TOP], PUSH)],
+                        contact_tags=[RECT_BOTTOM]), obstacle=PLANE, friction=friction)
+    half = Problem(Body(MeshHierarchy.build(half_mesh, levels), MAT,
+                        [Dirichlet([RECT_TOP], PUSH), Dirichlet([RECT_LEFT], (0.0, None))],
+                        contact_tags=[RECT_BOTTOM]), obstacle=PLANE, friction=friction)
     rf, rh = full.solve(tol=1e-12), half.solve(tol=1e-12)
     assert rf.converged and rh.converged, (rf.status, rh.status)
     for p, r in ((full, rf), (half, rh)):
@@ -83,8 +83,8 @@ def test_prescribed_tangential_value_stays_exact_under_coulomb_friction():
     value holds exactly (friction acts on the free tangential components only, none here), the node
     does not penetrate, and the independent check passes."""
     h = MeshHierarchy.build(rectangle(4, 4, 1, 1), 4)
-    p = ContactProblem(h, MAT, [Dirichlet([RECT_TOP], PUSH), Dirichlet([RECT_LEFT], (0.002, None))],
-                       contact_tags=[RECT_BOTTOM], obstacle=PLANE, friction=Coulomb(0.5))
+    p = Problem(Body(h, MAT, [Dirichlet([RECT_TOP], PUSH), Dirichlet([RECT_LEFT], (0.002, None))],
+                     contact_tags=[RECT_BOTTOM]), obstacle=PLANE, friction=Coulomb(0.5))
     r = p.solve()
     assert r.converged, r.status
     k = corner(p.mesh)
@@ -97,8 +97,8 @@ def test_prescribed_normal_lift_is_not_a_contact_node():
     """The normal component prescribed (u_y = +0.001 on the left edge: the corner lifts off): the
     node is no contact node and takes its value; the rest of the bottom is in contact."""
     h = MeshHierarchy.build(rectangle(4, 4, 1, 1), 3)
-    p = ContactProblem(h, MAT, [Dirichlet([RECT_TOP], PUSH), Dirichlet([RECT_LEFT], (None, 0.001))],
-                       contact_tags=[RECT_BOTTOM], obstacle=PLANE)
+    p = Problem(Body(h, MAT, [Dirichlet([RECT_TOP], PUSH), Dirichlet([RECT_LEFT], (None, 0.001))],
+                     contact_tags=[RECT_BOTTOM]), obstacle=PLANE)
     k = corner(p.mesh)
     assert k not in set(p.contact.nodes.tolist())
     r = p.solve()
@@ -110,16 +110,16 @@ def test_prescribed_normal_lift_is_not_a_contact_node():
 def test_prescribed_penetration_is_an_error():
     h = MeshHierarchy.build(rectangle(4, 4, 1, 1), 2)
     with pytest.raises(ValueError, match="prescribes penetration"):
-        ContactProblem(h, MAT, [Dirichlet([RECT_TOP], PUSH), Dirichlet([RECT_LEFT], (None, -0.001))],
-                       contact_tags=[RECT_BOTTOM], obstacle=PLANE)
+        Problem(Body(h, MAT, [Dirichlet([RECT_TOP], PUSH), Dirichlet([RECT_LEFT], (None, -0.001))],
+                     contact_tags=[RECT_BOTTOM]), obstacle=PLANE)
 
 
 def test_misaligned_roller_is_refused_naming_the_node():
     h = MeshHierarchy.build(rectangle(4, 4, 1, 1), 2)
     tilted = PlaneObstacle((0.0, 0.0), (0.3, -1.0))
     with pytest.raises(ValueError, match=r"contact node 0 .*neither normal nor tangential"):
-        ContactProblem(h, MAT, [Dirichlet([RECT_TOP], PUSH), Dirichlet([RECT_LEFT], (0.0, None))],
-                       contact_tags=[RECT_BOTTOM], obstacle=tilted)
+        Problem(Body(h, MAT, [Dirichlet([RECT_TOP], PUSH), Dirichlet([RECT_LEFT], (0.0, None))],
+                     contact_tags=[RECT_BOTTOM]), obstacle=tilted)
 
 
 def test_core_classification():

@@ -7,24 +7,29 @@ import sys
 import numpy as np
 import pytest
 
-from contactmg import (HERTZ_ARC, HERTZ_TOP, RECT_BOTTOM, RECT_TOP, ContactProblem, Coulomb, Dirichlet, Frictionless, Material, MeshHierarchy, PlaneObstacle, _core, rectangle)
+from contactmg import (HERTZ_ARC, HERTZ_TOP, RECT_BOTTOM, RECT_TOP, Body, Coulomb, Dirichlet, Frictionless, Material,
+                       MeshHierarchy, PlaneObstacle, Problem, _core, rectangle)
+from contactmg.solve.options import with_cycle
 from contactmg.examples import hertz
 from contactmg.results.checks import contact_conditions
 
 
 def hertz_scene(h, F=0.4, nu=0.28, push=-0.005, plane_y=0.0):
     """The Hertz half disk on hierarchy h with another material, push or obstacle position."""
-    return ContactProblem(h, Material(2000.0, nu), [Dirichlet([HERTZ_TOP], (0.0, push))], contact_tags=[HERTZ_ARC],
-                          obstacle=PlaneObstacle((0.0, plane_y), (0.0, -1.0)),
-                          friction=Coulomb(F) if F > 0 else Frictionless())
+    # the solve defaults of the counts below: nmg F(3,3), the absolute stop 1e-11
+    return with_cycle(Problem(Body(h, Material(2000.0, nu), [Dirichlet([HERTZ_TOP], (0.0, push))],
+                                   contact_tags=[HERTZ_ARC]), obstacle=PlaneObstacle((0.0, plane_y), (0.0, -1.0)),
+                              friction=Coulomb(F) if F > 0 else Frictionless()))
 
 
 def layer(aspect, level=5):
     """4 x 4 quads of aspect ratio `aspect` (long and flat), refined, pressed and sheared with
     friction onto the rigid plane."""
     h = MeshHierarchy.build(rectangle(4, 4, lx=aspect * 1.0, ly=1.0, cell="quad"), level)
-    return ContactProblem(h, Material(100.0, 0.3), [Dirichlet([RECT_TOP], (0.01, -0.01))], contact_tags=[RECT_BOTTOM],
-                          obstacle=PlaneObstacle((0.0, 0.0), (0.0, -1.0)), friction=Coulomb(0.3))
+    # the solve defaults of the counts below: nmg F(3,3), the absolute stop 1e-11
+    return with_cycle(Problem(Body(h, Material(100.0, 0.3), [Dirichlet([RECT_TOP], (0.01, -0.01))],
+                                   contact_tags=[RECT_BOTTOM]), obstacle=PlaneObstacle((0.0, 0.0), (0.0, -1.0)),
+                              friction=Coulomb(0.3)))
 
 
 def rel_diff(a, b):

@@ -14,7 +14,8 @@ from contactmg import _core
 from contactmg.mesh.generators_3d import box
 from contactmg.mesh.hierarchy import MeshHierarchy
 from contactmg.model.material import Material
-from contactmg.solve.contact_problem import ContactProblem, Dirichlet
+from contactmg.model.problem import Body, Dirichlet, Problem
+from contactmg.solve.options import with_cycle
 from helpers import contraction
 
 
@@ -105,7 +106,7 @@ def _two_grid_rate(h, levels, nu=3, iterations=25):
 
 def _core_rate(h, levels, cycle):
     sub = MeshHierarchy(h.meshes[:levels], h.transfers[:levels - 1])
-    p = ContactProblem(sub, Material(E, NU), [Dirichlet([5], (0.0, 0.0, 0.0))], cycle=cycle, nu1=3, nu2=3)
+    p = with_cycle(Problem(Body(sub, Material(E, NU), [Dirichlet([5], (0.0, 0.0, 0.0))])), cycle, 3, 3)
     return contraction(p, cycles=25)[0]
 
 

@@ -10,7 +10,8 @@ from contactmg.mesh.generators_3d import ball_projector, half_ball
 from contactmg.examples.hertz import hertz_adaptive_hierarchy
 from contactmg.mesh.hierarchy import MeshHierarchy, boundary_interpolation
 from contactmg.model.material import Material
-from contactmg.solve.contact_problem import ContactProblem, Dirichlet
+from contactmg.model.problem import Body, Dirichlet, Problem
+from contactmg.solve.options import with_cycle
 
 
 def linear_field(points, seed):
@@ -90,7 +91,7 @@ def test_linear_rate_on_the_adaptive_hertz_levels_is_bounded_independently_of_th
     h = hertz_adaptive_hierarchy(8, 0.4)
     rates = []
     for L in range(4, 9):
-        q = ContactProblem(h.truncated(L), Material(2000.0, 0.28), [Dirichlet([HERTZ_TOP], (0.0, 0.0))], cycle="F")
+        q = with_cycle(Problem(Body(h.truncated(L), Material(2000.0, 0.28), [Dirichlet([HERTZ_TOP], (0.0, 0.0))])), "F")
         rng = np.random.default_rng(0)
         q.load = np.zeros_like(q.load)
         r = q.solve(u0=rng.standard_normal(q.load.shape), tol=1e-300, rtol=1e-300, max_cycles=12, omega=1.0)

@@ -12,9 +12,9 @@ from contactmg.mesh.hierarchy import MeshHierarchy
 from contactmg.model.material import Material
 from contactmg.model.mortar_3d import (clip_polygons, element_dual_coefficients, mortar_coupling_3d, polygon_area,
                                  shape)
-from contactmg.solve.contact_problem import Dirichlet
+from contactmg.model.problem import Dirichlet
 from contactmg.results.result import SLIP, STICK
-from contactmg import Body, ContactPair, TwoBodyProblem
+from contactmg import Body, ContactPair, Problem
 
 MAT = Material(1000.0, 0.3)
 BOTTOM, TOP = 5, 6  # box tags of z = 0 and z = lz
@@ -239,7 +239,7 @@ def test_patch_test_uniform_pressure_across_a_non_matching_3d_interface(cell):
 
     up, lo = _stacked_boxes(cell)
     bodies = [Body(up, MAT, [Dirichlet([TOP], exact)]), Body(lo, MAT, [Dirichlet([BOTTOM], exact)])]
-    p = TwoBodyProblem(bodies, ContactPair(0, 1, [BOTTOM], [TOP], search=0.1), Frictionless())
+    p = Problem(bodies, pairs=ContactPair(0, 1, [BOTTOM], [TOP], search=0.1), friction=Frictionless())
     assert len(up.finest.boundary_nodes([BOTTOM])) != len(lo.finest.boundary_nodes([TOP]))  # non-matching
     r = p.solve()
     assert r.converged, r.status
@@ -272,7 +272,6 @@ def test_matching_meshes_give_the_3d_node_to_node_solution():
     of a mirrored tetrahedral mesh picks other interior diagonals, so its refinement is not the mirror
     image of the refined mesh and the problem is no longer symmetric.)"""
     from contactmg.model.obstacle import PlaneObstacle
-    from contactmg.solve.contact_problem import ContactProblem
 
     mesh = box(3, 3, 2, cell="hexahedron")
     up, lo = MeshHierarchy.build(mesh, 2), MeshHierarchy.build(_mirror_box(mesh), 2)
@@ -284,11 +283,11 @@ def test_matching_meshes_give_the_3d_node_to_node_solution():
         return push(x * [1.0, 1.0, -1.0]) * [1.0, 1.0, -1.0]
 
     bodies = [Body(up, MAT, [Dirichlet([TOP], push)]), Body(lo, MAT, [Dirichlet([BOTTOM], push_mirror)])]
-    p = TwoBodyProblem(bodies, ContactPair(0, 1, [BOTTOM], [TOP], search=0.1), Frictionless())
+    p = Problem(bodies, pairs=ContactPair(0, 1, [BOTTOM], [TOP], search=0.1), friction=Frictionless())
     r = p.solve(tol=1e-13)
     assert r.converged
-    one = ContactProblem(up, MAT, [Dirichlet([TOP], push)], contact_tags=[BOTTOM],
-                         obstacle=PlaneObstacle((0.0, 0.0, 0.0), (0.0, 0.0, -1.0))).solve(tol=1e-13)
+    one = Problem(Body(up, MAT, [Dirichlet([TOP], push)], contact_tags=[BOTTOM]),
+                  obstacle=PlaneObstacle((0.0, 0.0, 0.0), (0.0, 0.0, -1.0))).solve(tol=1e-13)
     n0 = p.parts[0].mesh.num_points
     scale = np.abs(one.displacement).max()
     assert 0 < one.counts()["contact_nodes"] < len(one.contact_nodes)
@@ -302,7 +301,7 @@ def test_sliding_boxes_3d_every_node_at_the_coulomb_bound():
     F = 0.3
     up, lo = _stacked_boxes("hexahedron")
     bodies = [Body(up, MAT, [Dirichlet([TOP], (0.03, 0.03, -0.01))]), Body(lo, MAT, [Dirichlet([BOTTOM], (0.0, 0.0, 0.0))])]
-    p = TwoBodyProblem(bodies, ContactPair(0, 1, [BOTTOM], [TOP], search=0.1), Coulomb(F))
+    p = Problem(bodies, pairs=ContactPair(0, 1, [BOTTOM], [TOP], search=0.1), friction=Coulomb(F))
     r = p.solve()
     assert r.converged, r.status
     assert np.all(r.contact_state == SLIP)
@@ -456,8 +455,8 @@ def test_bodies_of_two_dimensions_are_a_clear_error():
     up, _ = _stacked_boxes("hexahedron", levels=2)
     flat = MeshHierarchy.build(rectangle(3, 3, 1, 1), 2)
     with pytest.raises(ValueError, match="one dimension"):
-        TwoBodyProblem([Body(up, MAT, [Dirichlet([TOP], (0.0, 0.0, -0.01))]), Body(flat, MAT, [Dirichlet([1], (0.0, 0.0))])],
-                       ContactPair(0, 1, [BOTTOM], [3], search=0.1))
+        Problem([Body(up, MAT, [Dirichlet([TOP], (0.0, 0.0, -0.01))]), Body(flat, MAT, [Dirichlet([1], (0.0, 0.0))])],
+                pairs=ContactPair(0, 1, [BOTTOM], [3], search=0.1))
 
 
 def test_spheres_tnnmg_reaches_the_nmg_solution(spheres_l2):

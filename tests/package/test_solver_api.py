@@ -5,7 +5,7 @@ import pytest
 
 import contactmg as cm
 from contactmg.examples.cylinders import cylinders_problem
-from contactmg.examples.hertz import TOP_DISPLACEMENT, hertz_adaptive_hierarchy, hertz_problem, hertz_problem_on
+from contactmg.examples.hertz import hertz_adaptive_hierarchy, hertz_problem_on
 
 
 def hertz_description(levels=4, friction=0.4):
@@ -107,13 +107,3 @@ def test_several_bodies_are_one_problem_class():
         cm.Problem(p.bodies)
     with pytest.raises(TypeError, match="Problem"):
         cm.Solver(object())
-
-
-def test_deprecated_alias_is_a_problem():
-    p = hertz_problem("triangle", 3, 0.4)
-    h = p.hierarchy
-    alias = cm.ContactProblem(h, cm.Material(2000.0, 0.28), [cm.Dirichlet([cm.HERTZ_TOP], (0.0, TOP_DISPLACEMENT))],
-                              contact_tags=[cm.HERTZ_ARC], obstacle=cm.PlaneObstacle((0.0, 0.0), (0.0, -1.0)),
-                              friction=cm.Coulomb(0.4))
-    assert isinstance(alias, cm.Problem) and cm.ContactProblem.__doc__
-    np.testing.assert_array_equal(alias.solve().displacement, p.solve().displacement)

@@ -16,7 +16,7 @@ from contactmg.model.material import Material
 from contactmg.mesh.mesh import Mesh
 from contactmg.model.obstacle import PlaneObstacle
 from contactmg.model.frames import contact_frames as _frames
-from contactmg.solve.contact_problem import ContactProblem, Dirichlet
+from contactmg.model.problem import Body, Dirichlet, Problem
 from contactmg.results.result import SLIP, STICK
 
 MAT = Material(100.0, 0.3)
@@ -37,8 +37,8 @@ def layer_problem(cell, s, depth, F, angle=0.6, H=0.5, levels=2):
         return (slide + (s - slide) * z / H) * t + np.c_[0 * z, 0 * z, -depth * z / H]
 
     h = MeshHierarchy.build(box(2, 2, 1, lz=H, cell=cell), levels)
-    prob = ContactProblem(h, MAT, [Dirichlet(SIDES + [TOP], exact)], contact_tags=[BOTTOM],
-                          obstacle=PlaneObstacle((0.0, 0.0, 0.0), (0.0, 0.0, -1.0)), friction=Coulomb(F))
+    prob = Problem(Body(h, MAT, [Dirichlet(SIDES + [TOP], exact)], contact_tags=[BOTTOM]),
+                   obstacle=PlaneObstacle((0.0, 0.0, 0.0), (0.0, 0.0, -1.0)), friction=Coulomb(F))
     return prob, exact, s_star, t
 
 
@@ -80,8 +80,8 @@ def test_sliding_layer_in_a_rotated_frame(regime):
     coarse = Mesh(m.points @ Q.T, m.cells, m.cell_type, m.facets, m.facet_tags)
     h = MeshHierarchy.build(coarse, 2)
     rotated_exact = lambda x: exact(x @ Q) @ Q.T  # noqa: E731
-    prob = ContactProblem(h, MAT, [Dirichlet(SIDES + [TOP], rotated_exact)], contact_tags=[BOTTOM],
-                          obstacle=PlaneObstacle((0.0, 0.0, 0.0), tuple(Q @ [0.0, 0.0, -1.0])), friction=Coulomb(F))
+    prob = Problem(Body(h, MAT, [Dirichlet(SIDES + [TOP], rotated_exact)], contact_tags=[BOTTOM]),
+                   obstacle=PlaneObstacle((0.0, 0.0, 0.0), tuple(Q @ [0.0, 0.0, -1.0])), friction=Coulomb(F))
     res = prob.solve(tol=1e-13)
     assert res.converged
     np.testing.assert_allclose(res.displacement, rotated_exact(prob.mesh.points), atol=1e-11)
@@ -178,9 +178,9 @@ def test_tresca_and_per_node_coefficients_in_3d(law):
     n = len(base.contact.nodes)
     r = np.hypot(*base.mesh.points[base.contact.nodes, :2].T)
     friction = Tresca(5.0) if law == "tresca" else Coulomb(np.where(r < 0.05, 2.0, 0.1))
-    prob = ContactProblem(base.hierarchy, base.material, [Dirichlet([2], (0.0, 0.0, -sphere.DISPLACEMENT))],
-                          contact_tags=[1], obstacle=PlaneObstacle((0.0, 0.0, 0.0), (0.0, 0.0, -1.0)),
-                          friction=friction)
+    prob = Problem(Body(base.hierarchy, base.material, [Dirichlet([2], (0.0, 0.0, -sphere.DISPLACEMENT))],
+                        contact_tags=[1]), obstacle=PlaneObstacle((0.0, 0.0, 0.0), (0.0, 0.0, -1.0)),
+                   friction=friction)
     res = prob.solve(tol=1e-11)
     assert res.converged and n > 0
     viol = contact_conditions(prob, res)
@@ -227,8 +227,8 @@ def test_gmsh_tetra_mesh_works_like_a_generated_one(tmp_path):
     results = []
     for mesh in (gen, read):
         h = MeshHierarchy.build(mesh, 2)
-        prob = ContactProblem(h, MAT, [Dirichlet([TOP], (0.002, 0.0, -0.01))], contact_tags=[BOTTOM],
-                              obstacle=PlaneObstacle((0.0, 0.0, 0.0), (0.0, 0.0, -1.0)), friction=Coulomb(0.3))
+        prob = Problem(Body(h, MAT, [Dirichlet([TOP], (0.002, 0.0, -0.01))], contact_tags=[BOTTOM]),
+                       obstacle=PlaneObstacle((0.0, 0.0, 0.0), (0.0, 0.0, -1.0)), friction=Coulomb(0.3))
         res = prob.solve(tol=1e-12)
         assert res.converged
         results.append((prob.mesh.points, res.displacement, res.reaction))

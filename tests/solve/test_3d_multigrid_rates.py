@@ -10,7 +10,8 @@ from contactmg.examples import cork
 from contactmg.mesh.generators_3d import CORK_TOP, CylinderProjector, ball_projector, box, cylinder, half_ball
 from contactmg.mesh.hierarchy import MeshHierarchy
 from contactmg.model.material import Material
-from contactmg.solve.contact_problem import ContactProblem, Dirichlet
+from contactmg.model.problem import Body, Dirichlet, Problem
+from contactmg.solve.options import with_cycle
 from contactmg.mesh.quality import dihedral_angles, radius_ratio, scaled_jacobian
 from helpers import contraction
 
@@ -56,7 +57,7 @@ def test_shortest_diagonal_refinement_keeps_three_similarity_classes():
 
 
 def _rate(hierarchy, tags, material=Material(2000.0, 0.28), cycles=20):
-    p = ContactProblem(hierarchy, material, [Dirichlet(tags, (0.0, 0.0, 0.0))], cycle="V", nu1=3, nu2=3)
+    p = with_cycle(Problem(Body(hierarchy, material, [Dirichlet(tags, (0.0, 0.0, 0.0))])), "V", 3, 3)
     return contraction(p, cycles=cycles)[0]
 
 

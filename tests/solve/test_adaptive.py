@@ -163,7 +163,7 @@ def test_changed_nodes_are_new_nodes_and_their_neighbours():
 # -- estimator ------------------------------------------------------------------------------------
 def linear_field_problem(h):
     G = np.array([[0.01, -0.02], [0.015, 0.005]])
-    return cm.ContactProblem(h, cm.Material(100.0, 0.3), [cm.Dirichlet([1, 2, 3, 4], lambda x: x @ G.T)])
+    return cm.Problem(cm.Body(h, cm.Material(100.0, 0.3), [cm.Dirichlet([1, 2, 3, 4], lambda x: x @ G.T)]))
 
 
 def test_estimator_vanishes_for_a_solution_exact_in_the_space():
@@ -173,8 +173,8 @@ def test_estimator_vanishes_for_a_solution_exact_in_the_space():
     h = MeshHierarchy.build(m, 2)
     res = linear_field_problem(h).solve(tol=1e-14)
     est = estimate(h, linear_field_problem, res)
-    loaded = lambda hh: cm.ContactProblem(hh, cm.Material(100.0, 0.3), [cm.Dirichlet([1, 2, 3, 4], (0.0, 0.0))],  # noqa: E731
-                                          body_force=(0.0, -1.0))
+    loaded = lambda hh: cm.Problem(cm.Body(hh, cm.Material(100.0, 0.3), [cm.Dirichlet([1, 2, 3, 4], (0.0, 0.0))],
+                                           body_force=(0.0, -1.0)))
     est_loaded = estimate(h, loaded, loaded(h).solve(tol=1e-14))
     assert est_loaded.total > 1e-3
     assert est.total < 1e-9 * est_loaded.total * 1e3

@@ -9,7 +9,8 @@ import contactmg as cm
 from contactmg.examples import hertz
 from contactmg.mesh.generators import HERTZ_ARC, HERTZ_TOP, hertz_half_disk, hertz_projector
 from contactmg.mesh.hierarchy import MeshHierarchy
-from contactmg.solve.contact_problem import ContactProblem, Dirichlet
+from contactmg.model.problem import Dirichlet
+from contactmg.solve.options import with_cycle
 
 
 @pytest.fixture(scope="module")
@@ -18,10 +19,15 @@ def hier():
 
 
 def problem(hier, **kw):
+    """The Hertz problem on `hier` with the Body, obstacle and friction arguments `kw` changed; cycle,
+    nu1 and nu2 (if given) set as its solve defaults by with_cycle."""
+    cycle = {k: kw.pop(k) for k in ("cycle", "nu1", "nu2") if k in kw}
     args = dict(material=cm.Material(2000.0, 0.28), dirichlet=[Dirichlet([HERTZ_TOP], (0.0, -0.005))],
                 contact_tags=[HERTZ_ARC], obstacle=cm.PlaneObstacle((0.0, 0.0), (0.0, -1.0)), friction=cm.Coulomb(0.4))
     args.update(kw)
-    return ContactProblem(hier, **args)
+    obstacle, friction = args.pop("obstacle"), args.pop("friction")
+    p = cm.Problem(cm.Body(hier, **args), obstacle=obstacle, friction=friction)
+    return with_cycle(p, **cycle) if cycle else p
 
 
 @pytest.mark.parametrize("E, nu, exc, match", [

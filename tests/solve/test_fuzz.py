@@ -96,14 +96,16 @@ def test_problem_and_solve_parameters_never_crash(cell, E, nu, law, F, normal, p
     import contactmg as cm
     from contactmg.results.checks import contact_conditions
     from contactmg.mesh.generators import HERTZ_ARC, HERTZ_TOP
+    from contactmg.solve.options import with_cycle
 
     h = _hertz_hierarchy(cell)
     try:
         friction = {"frictionless": lambda: cm.Frictionless(), "tresca": lambda: cm.Tresca(F),
                     "coulomb": lambda: cm.Coulomb(F)}[law]()
-        p = cm.ContactProblem(h, cm.Material(E, nu), [cm.Dirichlet([HERTZ_TOP], push)], contact_tags=[HERTZ_ARC],
-                              obstacle=cm.PlaneObstacle((0.0, plane_y), normal), friction=friction, cycle=cycle,
-                              nu1=nu1, nu2=nu2)
+        body = cm.Body(h, cm.Material(E, nu), [cm.Dirichlet([HERTZ_TOP], push)], contact_tags=[HERTZ_ARC])
+        # the drawn cycle as the problem's solve defaults (with_cycle refuses a bad one)
+        p = with_cycle(cm.Problem(body, obstacle=cm.PlaneObstacle((0.0, plane_y), normal), friction=friction),
+                       cycle, nu1, nu2)
         res = p.solve(method, tol=tol, max_cycles=max_cycles)
     except (ValueError, TypeError) as e:
         assert str(e)
@@ -139,8 +141,9 @@ def test_valid_scenes_converge_to_verified_solutions(cell, E, nu, law, F, angle,
     # plane_y against n (plane_y > 0: an initial penetration)
     n = np.array([np.sin(angle), -np.cos(angle)])
     point = np.array([0.0, 0.4]) + 0.4 * n - plane_y * n
-    p = cm.ContactProblem(h, cm.Material(E, nu), [cm.Dirichlet([HERTZ_TOP], (shear, push))], contact_tags=[HERTZ_ARC],
-                          obstacle=cm.PlaneObstacle(tuple(point), tuple(n)), friction=friction)
+    p = cm.Problem(cm.Body(h, cm.Material(E, nu), [cm.Dirichlet([HERTZ_TOP], (shear, push))],
+                           contact_tags=[HERTZ_ARC]), obstacle=cm.PlaneObstacle(tuple(point), tuple(n)),
+                   friction=friction)
     res = p.solve(tol=0.0, rtol=1e-11, max_cycles=300)  # relative: the scenes' scales differ (E from 1 to 1e6)
     assert np.all(np.isfinite(res.displacement))
     assert res.converged, res.status

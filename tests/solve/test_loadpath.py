@@ -197,7 +197,7 @@ def test_bad_path_input(problem):
         LoadPath.proportional(problem, 0)
     with pytest.raises(ValueError, match="load path is solved"):
         LoadPath.proportional(problem, 2).solve(method="linear")
-    from contactmg.solve.contact_problem import Dirichlet
+    from contactmg.model.problem import Dirichlet
     with pytest.raises(ValueError, match="other components"):
         LoadPath(problem, [1.0], dirichlet=lambda t: [Dirichlet([HERTZ_TOP], (None, -0.005))]).solve()
 
@@ -318,3 +318,38 @@ def test_3d_friction_force_opposes_the_slip_increment():
         unit = inc[slip] / np.linalg.norm(inc[slip], axis=1)[:, None]
         assert np.abs(t[slip] + F * n[slip][:, None] * unit).max(initial=0.0) <= 1e-8 * scale
     assert (res.last.contact_state == SLIP).sum() > (res.steps[1].contact_state == SLIP).sum()
+
+
+def test_the_default_method_is_the_problems_as_for_a_single_solve():
+    """method=None means what it means for problem.solve: the method the problem's default_options
+    name, else resolve_options' choice for the problem -- but nmg where that is tnnmg, which takes no
+    slip origin; a method given (to solve or in its options) still wins."""
+    from contactmg.model.material import Material
+    from contactmg.model.problem import Body, Dirichlet, Problem
+    from contactmg.solve.options import options_from
+
+    def methods(path_result):
+        assert path_result.converged
+        return {r.method for r in path_result.steps}
+
+    named = hertz_problem("triangle", 3, F)  # its defaults name nmg
+    path = LoadPath.proportional(named, 2)
+    default, nmg = path.solve(tol=1e-11), path.solve("nmg", tol=1e-11)
+    assert methods(default) == {"nmg"} and default.cycles == nmg.cycles
+    assert np.array_equal(default.last.displacement, nmg.last.displacement)
+    named.default_options = options_from(named.default_options).replace(method="fixed-point")
+    assert methods(path.solve(tol=1e-11)) == {"fixed-point"}
+    assert methods(path.solve("nmg", tol=1e-11)) == {"nmg"}
+    assert methods(path.solve(options=dict(method="nmg", tol=1e-11))) == {"nmg"}
+    named.default_options = options_from(named.default_options).replace(method="tnnmg")
+    with pytest.raises(ValueError, match="load path is solved by one of"):
+        path.solve()
+
+    # no defaults of its own: the solver's choice, nmg on the Hertz material; tnnmg (for the
+    # nearly incompressible one) turns to nmg
+    for nu, single in ((0.28, "nmg"), (0.49, "tnnmg")):
+        body = Body(named.hierarchy, Material(2000.0, nu), [Dirichlet([HERTZ_TOP], (0.0, TOP_DISPLACEMENT))],
+                    contact_tags=named.bodies[0].contact_tags)
+        p = Problem(body, obstacle=named.obstacle, friction=named.friction)
+        assert p.default_options is None and resolve_options(p).method == single
+        assert methods(LoadPath.proportional(p, 2).solve(max_cycles=300)) == {"nmg"}

@@ -5,7 +5,8 @@ import pytest
 from contactmg.mesh.generators import HERTZ_TOP, hertz_half_disk, hertz_projector, rectangle
 from contactmg.mesh.hierarchy import MeshHierarchy
 from contactmg.model.material import Material
-from contactmg.solve.contact_problem import ContactProblem, Dirichlet
+from contactmg.model.problem import Body, Dirichlet, Problem
+from contactmg.solve.options import with_cycle
 
 MAT = Material(2000.0, 0.28)
 
@@ -13,7 +14,7 @@ MAT = Material(2000.0, 0.28)
 def contraction(h, bcs, cycle, nu, cycles=16, seed=0):
     """Zero load and a random start: the error is the iterate; the rate is the geometric mean of
     the last five ratios of successive correction norms."""
-    p = ContactProblem(h, MAT, bcs, body_force=None, cycle=cycle, nu1=nu, nu2=nu)
+    p = with_cycle(Problem(Body(h, MAT, bcs)), cycle, nu, nu)
     u0 = np.random.default_rng(seed).standard_normal(p.load.shape)
     res = p.solve(u0=u0, tol=1e-300, rtol=1e-300, max_cycles=cycles)
     c = res.history["correction_norm"]
@@ -67,7 +68,7 @@ def test_linear_solve_reaches_tolerance_and_matches_direct_solve():
     from helpers import to_scipy
 
     h = MeshHierarchy.build(rectangle(2, 2, cell="triangle"), 5)
-    p = ContactProblem(h, MAT, [Dirichlet([4], (0.0, 0.0))], body_force=(0.0, -1.0))
+    p = Problem(Body(h, MAT, [Dirichlet([4], (0.0, 0.0))], body_force=(0.0, -1.0)))
     res = p.solve(tol=1e-12)
     assert res.converged and res.cycles < 20
     K = to_scipy(p.A).tocsr()

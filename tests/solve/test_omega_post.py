@@ -1,5 +1,5 @@
 """The post-smoothing sweeps' own over-relaxation: SolverOptions.omega_post,
-solve(omega_post=...) and ContactProblem.smoother_omega_post. Off by default; with omega = 1 before
+solve(omega_post=...) and its default in resolve_options. Off by default; with omega = 1 before
 the coarse correction and 1.7 after it the linear rate on the adaptive Hertz levels falls well below
 the symmetric default's at the same cost, the monotone cycles stay monotone and Algorithm 2 reaches
 the same solution."""
@@ -14,8 +14,8 @@ from contactmg.examples.hertz import hertz_adaptive_hierarchy, hertz_problem, he
 from contactmg.mesh.hierarchy import MeshHierarchy
 from contactmg.model.material import Material
 from contactmg.model.obstacle import PlaneObstacle
-from contactmg.solve.contact_problem import ContactProblem, Dirichlet
-from contactmg.solve.options import options_from, resolve_options
+from contactmg.model.problem import Body, Dirichlet, Problem
+from contactmg.solve.options import options_from, resolve_options, with_cycle
 
 
 
@@ -26,7 +26,7 @@ def adaptive8():
 
 def rate(h, omega, omega_post=None):
     """F(3,3) contraction of the linear multigrid (zero load, random start, last 5 of 14 ratios)."""
-    q = ContactProblem(h, Material(2000.0, 0.28), [Dirichlet([HERTZ_TOP], (0.0, 0.0))], cycle="F")
+    q = with_cycle(Problem(Body(h, Material(2000.0, 0.28), [Dirichlet([HERTZ_TOP], (0.0, 0.0))])), "F")
     q.load = np.zeros_like(q.load)
     r = q.solve(u0=np.random.default_rng(0).standard_normal(q.load.shape), tol=1e-300, rtol=1e-300, max_cycles=14,
                 omega=omega, omega_post=omega_post)
@@ -61,8 +61,10 @@ def test_split_omega_lowers_the_linear_rate(adaptive8):
 @pytest.mark.parametrize("omega, omega_post", [(1.0, 1.7), (1.8, 1.0), (1.0, 1.95)])
 def test_split_omega_tresca_cycles_stay_monotone(omega, omega_post):
     h = MeshHierarchy.build(hertz_half_disk("triangle"), 5, projector=hertz.hertz_projector())
-    p = ContactProblem(h, Material(hertz.E, hertz.NU), [Dirichlet([HERTZ_TOP], (0.0, hertz.TOP_DISPLACEMENT))],
-                       contact_tags=[1], obstacle=PlaneObstacle((0.0, 0.0), (0.0, -1.0)), friction=Tresca(30.0))
+    # Algorithm 2 (the monotone cycles) to the absolute stop 1e-11
+    p = with_cycle(Problem(Body(h, Material(hertz.E, hertz.NU),
+                                [Dirichlet([HERTZ_TOP], (0.0, hertz.TOP_DISPLACEMENT))], contact_tags=[1]),
+                           obstacle=PlaneObstacle((0.0, 0.0), (0.0, -1.0)), friction=Tresca(30.0)))
     r = p.solve(omega=omega, omega_post=omega_post)
     assert r.converged, r.status
     e = r.history["energy"]

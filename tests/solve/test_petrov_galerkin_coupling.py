@@ -1,6 +1,6 @@
 """Algorithm 2's cycles with the sliding nodes' Petrov-Galerkin coupling on level L-1
 (0006-petrov-galerkin-coupling): SolverOptions.petrov_galerkin, solve(petrov_galerkin=True),
-ContactProblem.petrov_galerkin. On by default for Coulomb friction on 2D adaptive
+its default in resolve_options. On by default for Coulomb friction on 2D adaptive
 hierarchies (with the post-smoothing's own omega, DEFAULT_OMEGA_POST_ADAPTIVE), off on uniform
 ones and in 3D. With it on the solve reaches the same solution and passes the independent check,
 the coupling is really used (in every cycle but the first), the top coarse level is symmetric
@@ -23,7 +23,7 @@ from contactmg.results.checks import contact_conditions
 from contactmg.model.friction import Tresca
 from contactmg.examples.hertz import hertz_adaptive_hierarchy, hertz_problem
 from contactmg.solve.options import DEFAULT_OMEGA_POST_ADAPTIVE
-from contactmg.solve.contact_problem import ContactProblem, Dirichlet
+from contactmg.model.problem import Body, Dirichlet, Problem
 from contactmg import _core
 from contactmg.solve.options import options_from, resolve_options
 
@@ -132,8 +132,8 @@ def test_laws_without_an_iterate_dependent_bound_ignore_it():
 
 def tresca_problem(level):
     h = MeshHierarchy.build(hertz_half_disk("triangle"), level, projector=hertz.hertz_projector())
-    return ContactProblem(h, Material(hertz.E, hertz.NU), [Dirichlet([HERTZ_TOP], (0.0, hertz.TOP_DISPLACEMENT))],
-                          contact_tags=[1], obstacle=PlaneObstacle((0.0, 0.0), (0.0, -1.0)), friction=Tresca(30.0))
+    return Problem(Body(h, Material(hertz.E, hertz.NU), [Dirichlet([HERTZ_TOP], (0.0, hertz.TOP_DISPLACEMENT))],
+                        contact_tags=[1]), obstacle=PlaneObstacle((0.0, 0.0), (0.0, -1.0)), friction=Tresca(30.0))
 
 
 def test_3d_coulomb_same_solution():

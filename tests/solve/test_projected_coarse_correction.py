@@ -1,5 +1,5 @@
 """The projected coarse correction (SolverOptions.projected_coarse_correction, solve(projected_coarse_correction=...),
-ContactProblem.projected_coarse_correction). The coarse correction leaves out the gap bounds of the
+its default in resolve_options). The coarse correction leaves out the gap bounds of the
 inactive contact nodes. It is then projected onto the gap and taken with the exact line search of
 the frozen-bound energy.
 

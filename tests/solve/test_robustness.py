@@ -10,15 +10,16 @@ from contactmg.mesh.generators import rectangle
 from contactmg.mesh.hierarchy import MeshHierarchy
 from contactmg.model.material import Material
 from contactmg.model.obstacle import PlaneObstacle
-from contactmg.solve.contact_problem import ContactProblem, Dirichlet
+from contactmg.model.problem import Body, Dirichlet, Problem
+from contactmg.solve.options import with_cycle
 from helpers import assert_contact_conditions
 
 
 def hertz_variant(L=5, F=0.4, nu=0.28, push=-0.005, plane_y=0.0, cell="triangle"):
     base = hertz.hertz_problem(cell, L, 0.0)
-    return ContactProblem(base.hierarchy, Material(2000.0, nu), [Dirichlet([2], (0.0, push))], contact_tags=[1],
-                          obstacle=PlaneObstacle((0.0, plane_y), (0.0, -1.0)),
-                          friction=Coulomb(F) if F > 0 else Frictionless())
+    return Problem(Body(base.hierarchy, Material(2000.0, nu), [Dirichlet([2], (0.0, push))], contact_tags=[1]),
+                   obstacle=PlaneObstacle((0.0, plane_y), (0.0, -1.0)),
+                   friction=Coulomb(F) if F > 0 else Frictionless())
 
 
 @pytest.mark.parametrize("F", [0.0, 1e-3, 0.4, 5.0, 100.0, 1e3])
@@ -48,7 +49,7 @@ def test_nothing_touches_costs_a_linear_solve():
     res = p.solve()
     assert res.converged and res.counts()["contact_nodes"] == 0
     assert res.rebuilds == 0 and not np.any(res.history["rebuilt"])
-    lin = ContactProblem(p.hierarchy, p.material, [Dirichlet([2], (0.0, -0.005))])
+    lin = Problem(Body(p.hierarchy, p.material, [Dirichlet([2], (0.0, -0.005))]))
     lres = lin.solve()
     assert lres.cycles <= res.cycles <= lres.cycles + 1
     np.testing.assert_allclose(res.displacement, lres.displacement, atol=1e-12)
@@ -89,8 +90,10 @@ def test_high_aspect_ratio_quads(aspect, max_cycles):
     satisfies the contact conditions, one that did not says so plainly, with finite numbers and a
     correction that shrank (slow, not divergent); aspect 1 and 8 must converge."""
     h = MeshHierarchy.build(rectangle(4, 4, lx=aspect * 1.0, ly=1.0, cell="quad"), 5)
-    p = ContactProblem(h, Material(100.0, 0.3), [Dirichlet([3], (0.01, -0.01))], contact_tags=[1],
-                       obstacle=PlaneObstacle((0.0, 0.0), (0.0, -1.0)), friction=Coulomb(0.3))
+    # Algorithm 2, whose point smoother the counts are of (the default method turns to TNNMG's line
+    # smoother on stretched cells, which converges at every aspect here)
+    p = with_cycle(Problem(Body(h, Material(100.0, 0.3), [Dirichlet([3], (0.01, -0.01))], contact_tags=[1]),
+                           obstacle=PlaneObstacle((0.0, 0.0), (0.0, -1.0)), friction=Coulomb(0.3)))
     res = p.solve(max_cycles=max_cycles)
     print(f"aspect {aspect}: {res.cycles} cycles, {res.status}")
     assert np.all(np.isfinite(res.displacement))
@@ -117,9 +120,9 @@ def test_tilted_obstacle(law, cell):
     from contactmg.results.checks import contact_conditions
 
     base = hertz.hertz_problem(cell, 4, 0.0)
-    p = ContactProblem(base.hierarchy, Material(2000.0, 0.28), [Dirichlet([2], (-0.02, -0.05))], contact_tags=[1],
-                       obstacle=PlaneObstacle((0.0, -0.02), (0.2, -1.0)),
-                       friction=Coulomb(0.3) if law == "coulomb" else Frictionless())
+    p = Problem(Body(base.hierarchy, Material(2000.0, 0.28), [Dirichlet([2], (-0.02, -0.05))], contact_tags=[1]),
+                obstacle=PlaneObstacle((0.0, -0.02), (0.2, -1.0)),
+                friction=Coulomb(0.3) if law == "coulomb" else Frictionless())
     res = p.solve()
     assert res.converged, res.status
     assert res.counts()["contact_nodes"] > 5
@@ -135,9 +138,9 @@ def test_tilted_obstacle(law, cell):
 def test_overflow_is_reported_as_divergence():
     """A finite load so large that the iterates overflow: the solve stops at once and says so."""
     base = hertz.hertz_problem("triangle", 4, 0.4)
-    p = ContactProblem(base.hierarchy, Material(2000.0, 0.28), [Dirichlet([2], (0.0, -0.005))], contact_tags=[1],
-                       obstacle=PlaneObstacle((0.0, 0.0), (0.0, -1.0)), friction=Coulomb(0.4),
-                       body_force=(0.0, -1e300))
+    p = Problem(Body(base.hierarchy, Material(2000.0, 0.28), [Dirichlet([2], (0.0, -0.005))], contact_tags=[1],
+                     body_force=(0.0, -1e300)), obstacle=PlaneObstacle((0.0, 0.0), (0.0, -1.0)),
+                friction=Coulomb(0.4))
     res = p.solve()
     assert not res.converged and res.cycles == 1
     assert res.status.startswith("diverged") and "no longer finite" in res.status
@@ -153,8 +156,8 @@ def test_plane_cutting_through_the_body_at_57_degrees(cell):
 
     base = hertz.hertz_problem(cell, 3, 0.0)
     n = np.array([np.sin(1.0), -np.cos(1.0)])
-    p = ContactProblem(base.hierarchy, Material(12423.0, 0.0), [Dirichlet([2], (0.0, 0.0))], contact_tags=[1],
-                       obstacle=PlaneObstacle((0.0, 0.0), tuple(n)), friction=Frictionless())
+    p = Problem(Body(base.hierarchy, Material(12423.0, 0.0), [Dirichlet([2], (0.0, 0.0))], contact_tags=[1]),
+                obstacle=PlaneObstacle((0.0, 0.0), tuple(n)), friction=Frictionless())
     assert p.contact.gaps.min() < -0.15
     res = p.solve()
     assert res.converged, res.status

@@ -15,7 +15,7 @@ from contactmg.results import plots
 from contactmg.results.checks import VIOLATION_TOL, contact_conditions
 from contactmg.mesh.generators import RECT_BOTTOM, RECT_LEFT, RECT_TOP, rectangle
 from contactmg.mesh.mesh import Mesh
-from contactmg.solve.contact_problem import ContactProblem, Dirichlet
+from contactmg.model.problem import Body, Dirichlet, Problem
 
 MAT = cm.Material(1000.0, 0.3)
 
@@ -33,8 +33,8 @@ def block_on_plane(angle=0.0, push=-0.01, F=0.3, levels=4, cell="triangle", lx=2
     up = np.array([-np.sin(angle), np.cos(angle)])
     h = cm.MeshHierarchy.build(mesh, levels)
     law = cm.Coulomb(F) if F > 0 else cm.Frictionless()
-    return ContactProblem(h, MAT, [Dirichlet(RECT_TOP, tuple(push * up))], contact_tags=RECT_BOTTOM,
-                          obstacle=cm.PlaneObstacle(tuple(-gap * up), tuple(-up)), friction=law)
+    return Problem(Body(h, MAT, [Dirichlet(RECT_TOP, tuple(push * up))], contact_tags=RECT_BOTTOM),
+                   obstacle=cm.PlaneObstacle(tuple(-gap * up), tuple(-up)), friction=law)
 
 
 # -- item 2: the independent check on zero-gap, tilted and lifted-off scenes -----------------------
@@ -67,11 +67,11 @@ def test_check_passes_correct_and_rejects_perturbed_solutions(angle, push):
 def test_contact_boundary_left_empty_by_dirichlet_is_an_error():
     h = cm.MeshHierarchy.build(rectangle(2, 2), 2)
     with pytest.raises(ValueError, match="contact boundary is empty"):
-        ContactProblem(h, MAT, [Dirichlet([RECT_BOTTOM], (0.0, 0.0))], contact_tags=[RECT_BOTTOM],
-                       obstacle=cm.PlaneObstacle((0.0, 0.0), (0.0, -1.0)))
+        Problem(Body(h, MAT, [Dirichlet([RECT_BOTTOM], (0.0, 0.0))], contact_tags=[RECT_BOTTOM]),
+                obstacle=cm.PlaneObstacle((0.0, 0.0), (0.0, -1.0)))
     # the same problem with a free contact side is a contact problem
-    p = ContactProblem(h, MAT, [Dirichlet([RECT_TOP], (0.0, -0.01))], contact_tags=[RECT_BOTTOM],
-                       obstacle=cm.PlaneObstacle((0.0, 0.0), (0.0, -1.0)))
+    p = Problem(Body(h, MAT, [Dirichlet([RECT_TOP], (0.0, -0.01))], contact_tags=[RECT_BOTTOM]),
+                obstacle=cm.PlaneObstacle((0.0, 0.0), (0.0, -1.0)))
     assert p.law == "frictionless" and len(p.contact.nodes) == 5  # the bottom nodes of level 2
 
 
@@ -170,14 +170,14 @@ def two_blocks(cell="triangle"):
 def test_rigid_motion_is_checked_piece_by_piece():
     h = cm.MeshHierarchy.build(two_blocks(), 3)
     with pytest.raises(ValueError, match="rigid-body motion of piece 2 of the 2 disconnected pieces"):
-        ContactProblem(h, MAT, [Dirichlet([RECT_LEFT], (0.0, 0.0))], body_force=(0.0, -1.0))
+        Problem(Body(h, MAT, [Dirichlet([RECT_LEFT], (0.0, 0.0))], body_force=(0.0, -1.0)))
     # both pieces held: solves, and each behaves as the block alone
-    p = ContactProblem(h, MAT, [Dirichlet([RECT_LEFT], (0.0, 0.0)), Dirichlet([RECT_LEFT + 10], (0.0, 0.0))],
-                       body_force=(0.0, -1.0))
+    p = Problem(Body(h, MAT, [Dirichlet([RECT_LEFT], (0.0, 0.0)), Dirichlet([RECT_LEFT + 10], (0.0, 0.0))],
+                     body_force=(0.0, -1.0)))
     res = p.solve()
     assert res.converged
-    single = ContactProblem(cm.MeshHierarchy.build(rectangle(2, 2), 3), MAT, [Dirichlet([RECT_LEFT], (0.0, 0.0))],
-                            body_force=(0.0, -1.0)).solve()
+    single = Problem(Body(cm.MeshHierarchy.build(rectangle(2, 2), 3), MAT, [Dirichlet([RECT_LEFT], (0.0, 0.0))],
+                          body_force=(0.0, -1.0))).solve()
     from scipy.spatial import cKDTree
 
     x = res.mesh.points
@@ -275,15 +275,15 @@ def test_boundary_stress_along_arc_length_keeps_every_node():
 
 def test_a_flipped_obstacle_normal_is_refused():
     h = cm.MeshHierarchy.build(rectangle(2, 2), 2)
-    kw = dict(material=MAT, dirichlet=[Dirichlet([RECT_TOP], (0.0, -0.01))], contact_tags=[RECT_BOTTOM])
+    body = Body(h, MAT, [Dirichlet([RECT_TOP], (0.0, -0.01))], contact_tags=[RECT_BOTTOM])
     with pytest.raises(ValueError, match="normal pointing into the body"):
-        ContactProblem(h, obstacle=cm.PlaneObstacle((0.0, -0.1), (0.0, 1.0)), **kw)  # normal into the body
+        Problem(body, obstacle=cm.PlaneObstacle((0.0, -0.1), (0.0, 1.0)))  # normal into the body
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        ContactProblem(h, obstacle=cm.PlaneObstacle((0.0, -0.1), (0.0, -1.0)), **kw)
+        Problem(body, obstacle=cm.PlaneObstacle((0.0, -0.1), (0.0, -1.0)))
     # some nodes inside (a tilted plane cutting the corner): a defined initial penetration, said
     with pytest.warns(UserWarning, match=r"start inside the obstacle by up to"):
-        p = ContactProblem(h, obstacle=cm.PlaneObstacle((0.5, 0.0), (0.1, -1.0)), **kw)
+        p = Problem(body, obstacle=cm.PlaneObstacle((0.5, 0.0), (0.1, -1.0)))
     assert p.contact.gaps.min() < 0 < p.contact.gaps.max()
 
 
@@ -298,8 +298,8 @@ def test_per_node_data_by_node_ids():
     gaps, normals = cm.PlaneObstacle((0.0, 0.0), (0.0, -1.0)).gaps_and_normals(x[arc])
 
     def build(obstacle, friction):
-        return ContactProblem(base.hierarchy, base.material, [Dirichlet(cm.HERTZ_TOP, (0.0, -0.005))],
-                              contact_tags=cm.HERTZ_ARC, obstacle=obstacle, friction=friction)
+        return Problem(Body(base.hierarchy, base.material, [Dirichlet(cm.HERTZ_TOP, (0.0, -0.005))],
+                            contact_tags=cm.HERTZ_ARC), obstacle=obstacle, friction=friction)
 
     by_id = build(cm.NodalObstacle(gaps, normals, nodes=arc), cm.Coulomb(F, nodes=arc)).solve()
     order = {int(k): i for i, k in enumerate(arc)}
@@ -336,24 +336,24 @@ def test_numpy_scalars_planar_round_off_and_unambiguous_tags(tmp_path):
         cm.read_mesh(tmp_path / "q.vtu")
     # one integer tag means that tag; anything else is named
     h = cm.MeshHierarchy.build(r, 2)
-    one = ContactProblem(h, MAT, [Dirichlet(RECT_TOP, (0.0, -0.01))], contact_tags=RECT_BOTTOM,
-                         obstacle=cm.PlaneObstacle((0.0, 0.0), (0.0, -1.0)))
-    seq = ContactProblem(h, MAT, [Dirichlet([RECT_TOP], (0.0, -0.01))], contact_tags=[RECT_BOTTOM],
-                         obstacle=cm.PlaneObstacle((0.0, 0.0), (0.0, -1.0)))
+    one = Problem(Body(h, MAT, [Dirichlet(RECT_TOP, (0.0, -0.01))], contact_tags=RECT_BOTTOM),
+                  obstacle=cm.PlaneObstacle((0.0, 0.0), (0.0, -1.0)))
+    seq = Problem(Body(h, MAT, [Dirichlet([RECT_TOP], (0.0, -0.01))], contact_tags=[RECT_BOTTOM]),
+                  obstacle=cm.PlaneObstacle((0.0, 0.0), (0.0, -1.0)))
     np.testing.assert_array_equal(one.contact.nodes, seq.contact.nodes)
     np.testing.assert_array_equal(one.fixed, seq.fixed)
-    single = ContactProblem(h, MAT, Dirichlet(RECT_TOP, (0.0, -0.01)))  # one Dirichlet condition, not a list
+    single = Problem(Body(h, MAT, Dirichlet(RECT_TOP, (0.0, -0.01))))  # one Dirichlet condition, not a list
     np.testing.assert_array_equal(single.fixed, seq.fixed)
     with pytest.raises(TypeError, match="Dirichlet tags must be an integer tag or a sequence"):
         Dirichlet("top", (0.0, 0.0))
     with pytest.raises(TypeError, match="contact_tags must hold integer tags, got 1.5"):
-        ContactProblem(h, MAT, [Dirichlet(RECT_TOP, (0.0, -0.01))], contact_tags=[1.5],
-                       obstacle=cm.PlaneObstacle((0.0, 0.0), (0.0, -1.0)))
+        Problem(Body(h, MAT, [Dirichlet(RECT_TOP, (0.0, -0.01))], contact_tags=[1.5]),
+                obstacle=cm.PlaneObstacle((0.0, 0.0), (0.0, -1.0)))
     with pytest.raises(TypeError, match="contact_tags must be an integer tag"):
-        ContactProblem(h, MAT, [Dirichlet(RECT_TOP, (0.0, -0.01))], contact_tags=1.0,
-                       obstacle=cm.PlaneObstacle((0.0, 0.0), (0.0, -1.0)))
+        Problem(Body(h, MAT, [Dirichlet(RECT_TOP, (0.0, -0.01))], contact_tags=1.0),
+                obstacle=cm.PlaneObstacle((0.0, 0.0), (0.0, -1.0)))
     with pytest.raises(ValueError, match="Dirichlet values must be finite numbers"):
-        ContactProblem(h, MAT, [Dirichlet(RECT_TOP, ("0", -0.01))])
+        Problem(Body(h, MAT, [Dirichlet(RECT_TOP, ("0", -0.01))]))
 
 
 def test_box_pairs_and_components_match_brute_force():
@@ -395,9 +395,9 @@ def test_rigid_motion_per_piece_in_3d():
                      np.where(cube.points[cube.facets].mean(axis=1)[:, 2] < 1e-9, 2, 0)])
     h = cm.MeshHierarchy.build(two, 1)
     with pytest.raises(ValueError, match="piece 2 of the 2 disconnected pieces"):
-        ContactProblem(h, MAT, [Dirichlet(1, (0.0, 0.0, 0.0))])
+        Problem(Body(h, MAT, [Dirichlet(1, (0.0, 0.0, 0.0))]))
     # rollers on the bottom (u_z = 0) leave the in-plane motion of each cube free
     with pytest.raises(ValueError, match="piece 1 of the 2"):
-        ContactProblem(h, MAT, [Dirichlet(1, (None, None, 0.0)), Dirichlet(2, (0.0, 0.0, 0.0))])
-    p = ContactProblem(h, MAT, [Dirichlet(1, (0.0, 0.0, 0.0)), Dirichlet(2, (0.0, 0.0, 0.0))], body_force=(0, 0, -1.0))
+        Problem(Body(h, MAT, [Dirichlet(1, (None, None, 0.0)), Dirichlet(2, (0.0, 0.0, 0.0))]))
+    p = Problem(Body(h, MAT, [Dirichlet(1, (0.0, 0.0, 0.0)), Dirichlet(2, (0.0, 0.0, 0.0))], body_force=(0, 0, -1.0)))
     assert p.mesh.dim == 3 and p.fixed.sum() == 2 * 4 * 3

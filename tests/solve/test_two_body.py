@@ -15,9 +15,9 @@ from contactmg.results.hertz_fit import elliptic_fit, radial_elliptic_fit
 from contactmg.mesh.hierarchy import MeshHierarchy
 from contactmg.model.material import Material
 from contactmg.model.mortar import mortar_coupling_2d
-from contactmg.solve.contact_problem import Dirichlet
+from contactmg.model.problem import Dirichlet
 from contactmg.results.result import SLIP
-from contactmg import Body, ContactPair, TwoBodyProblem
+from contactmg import Body, ContactPair, Problem
 
 MAT = Material(1000.0, 0.3)
 
@@ -111,7 +111,7 @@ def test_patch_test_uniform_pressure_across_a_non_matching_interface():
 
     upper, lower = _blocks()
     bodies = [Body(upper, MAT, [Dirichlet([RECT_TOP], exact)]), Body(lower, MAT, [Dirichlet([RECT_BOTTOM], exact)])]
-    p = TwoBodyProblem(bodies, ContactPair(0, 1, [RECT_BOTTOM], [RECT_TOP], search=0.1), Frictionless())
+    p = Problem(bodies, pairs=ContactPair(0, 1, [RECT_BOTTOM], [RECT_TOP], search=0.1), friction=Frictionless())
     assert len(upper.finest.boundary_nodes([RECT_BOTTOM])) != len(lower.finest.boundary_nodes([RECT_TOP]))  # non-matching
     r = p.solve()
     assert r.converged, r.status
@@ -143,7 +143,6 @@ def test_matching_meshes_give_the_node_to_node_solution():
     non-uniform data keep the interface on y = 0: the upper block's solution is that of the one-body
     problem against the rigid plane y = 0 (an independent solve with an obstacle)."""
     from contactmg.model.obstacle import PlaneObstacle
-    from contactmg.solve.contact_problem import ContactProblem
 
     mesh = rectangle(6, 3, 1, 1, distort=0.2, seed=3)
     # keep the interface nodes on y = 0 (distort moves interior nodes only)
@@ -156,7 +155,7 @@ def test_matching_meshes_give_the_node_to_node_solution():
         return push(x) * [1.0, -1.0]
 
     bodies = [Body(upper, MAT, [Dirichlet([RECT_TOP], push)]), Body(lower, MAT, [Dirichlet([RECT_BOTTOM], push_mirror)])]
-    p = TwoBodyProblem(bodies, ContactPair(0, 1, [RECT_BOTTOM], [RECT_TOP], search=0.1), Frictionless())
+    p = Problem(bodies, pairs=ContactPair(0, 1, [RECT_BOTTOM], [RECT_TOP], search=0.1), friction=Frictionless())
     Mh = p.coupling.Mhat.tocsr()
     Mh.data[np.abs(Mh.data) < 1e-12] = 0.0  # round-off of the quadrature
     Mh.eliminate_zeros()
@@ -165,8 +164,8 @@ def test_matching_meshes_give_the_node_to_node_solution():
     assert np.allclose(lower_pts[Mh.indices], p.parts[0].mesh.points[p.coupling.nonmortar_nodes], atol=1e-12)
     r = p.solve(tol=1e-13)
     assert r.converged
-    one = ContactProblem(upper, MAT, [Dirichlet([RECT_TOP], push)], contact_tags=[RECT_BOTTOM],
-                         obstacle=PlaneObstacle((0.0, 0.0), (0.0, -1.0))).solve(tol=1e-13)
+    one = Problem(Body(upper, MAT, [Dirichlet([RECT_TOP], push)], contact_tags=[RECT_BOTTOM]),
+                  obstacle=PlaneObstacle((0.0, 0.0), (0.0, -1.0))).solve(tol=1e-13)
     n0 = p.parts[0].mesh.num_points
     scale = np.abs(one.displacement).max()
     assert 0 < one.counts()["contact_nodes"] < len(one.contact_nodes)  # a partial contact zone
@@ -182,7 +181,7 @@ def test_sliding_blocks_every_node_at_the_coulomb_bound():
     upper, lower = _blocks()
     bodies = [Body(upper, MAT, [Dirichlet([RECT_TOP], (0.05, -0.01))]),
               Body(lower, MAT, [Dirichlet([RECT_BOTTOM], (0.0, 0.0))])]
-    p = TwoBodyProblem(bodies, ContactPair(0, 1, [RECT_BOTTOM], [RECT_TOP], search=0.1), Coulomb(F))
+    p = Problem(bodies, pairs=ContactPair(0, 1, [RECT_BOTTOM], [RECT_TOP], search=0.1), friction=Coulomb(F))
     r = p.solve()
     assert r.converged, r.status
     assert np.all(r.contact_state == SLIP)
@@ -332,15 +331,15 @@ def test_two_body_bad_input_is_a_clear_error():
     bodies = [Body(upper, MAT, [Dirichlet([RECT_TOP], (0.0, -0.01))]), Body(lower, MAT, [Dirichlet([RECT_BOTTOM], (0.0, 0.0))])]
     pair = ContactPair(0, 1, [RECT_BOTTOM], [RECT_TOP], search=0.1)
     with pytest.raises(ValueError, match="two different bodies"):
-        TwoBodyProblem(bodies, ContactPair(0, 0, [RECT_BOTTOM], [RECT_TOP], search=0.1))
+        Problem(bodies, pairs=ContactPair(0, 0, [RECT_BOTTOM], [RECT_TOP], search=0.1))
     with pytest.raises(ValueError, match="search distance"):
-        TwoBodyProblem(bodies, ContactPair(0, 1, [RECT_BOTTOM], [RECT_TOP], search=-1.0))
+        Problem(bodies, pairs=ContactPair(0, 1, [RECT_BOTTOM], [RECT_TOP], search=-1.0))
     with pytest.raises(ValueError, match="mortar tags"):
-        TwoBodyProblem(bodies, ContactPair(0, 1, [RECT_BOTTOM], [99], search=0.1))
+        Problem(bodies, pairs=ContactPair(0, 1, [RECT_BOTTOM], [99], search=0.1))
     far = MeshHierarchy.build(rectangle(5, 3, 1, 1, origin=(0.0, -3.0)), 3)  # 2 below the upper block
     with pytest.raises(ValueError, match="sees the mortar boundary"):
-        TwoBodyProblem([bodies[0], Body(far, MAT, bodies[1].dirichlet)], pair)
+        Problem([bodies[0], Body(far, MAT, bodies[1].dirichlet)], pairs=pair)
     with pytest.raises(ValueError, match="nothing holds body 0 in a translation"):  # unsupported, frictionless, unloaded
-        TwoBodyProblem([Body(upper, MAT, []), bodies[1]], pair)
+        Problem([Body(upper, MAT, []), bodies[1]], pairs=pair)
     with pytest.raises(TypeError):
-        TwoBodyProblem(bodies, pair, friction="coulomb")
+        Problem(bodies, pairs=pair, friction="coulomb")

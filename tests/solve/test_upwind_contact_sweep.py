@@ -1,6 +1,6 @@
 """Algorithm 2's fine sweeps each followed by one more visit of the contact zone, the sliding nodes in
 the upwind order of the Coulomb Jacobian: SolverOptions.upwind_contact_sweep,
-solve(upwind_contact_sweep=...), ContactProblem.upwind_contact_sweep. On by default for Coulomb
+solve(upwind_contact_sweep=...), its default in resolve_options. On by default for Coulomb
 friction on 2D adaptive hierarchies, off on uniform ones, in 3D and for the other laws. With it on or off a solve reaches
 the same solution and passes the independent check, every iterate stays a fixed point of one plain
 sweep at the end (the visits are the sweep's own row updates), the result does not depend on the

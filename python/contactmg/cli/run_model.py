@@ -33,7 +33,9 @@ def solve_model(model: Model):
     t0 = time.perf_counter()
     if model.steps > 1:
         path = LoadPath.proportional(model.problem, model.steps)
-        results = path.solve(model.options.method or "nmg", model.options).steps
+        # the file's method, else the path's default for the problem (that of a single solve, nmg
+        # where that is tnnmg: load steps need a slip origin)
+        results = path.solve(options=model.options).steps
     else:
         res = Solver(model.problem, model.options).solve()
         res.extra.update(step=1, parameter=1.0)

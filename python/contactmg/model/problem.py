@@ -200,7 +200,7 @@ class Problem:
 
     Read-only facts: mesh, bodies, hierarchy, material, contact, friction, law, coefficients, load,
     fixed, fixed_values, transfers, rotated_frames(). Solving: contactmg.Solver(problem, options), or
-    problem.solve(...) (installed by contactmg.solve, see there)."""
+    problem.solve(...) through the Solver the problem keeps (problem.solver)."""
 
     # The SolverOptions that problem.solve starts from when it is given none (None: the defaults);
     # the description does not use it.
@@ -812,6 +812,46 @@ class Problem:
             data["body_id"] = self.body_id
         write_mesh(path, self.mesh, point_data=data, cell_data=result.cell_data())
 
+    # -- solving ----------------------------------------------------------------------------------
+    # The solve layer sits above this one: these import it when they run, so that importing the
+    # description loads no solver.
+    @property
+    def solver(self):
+        """The Solver kept by this problem for problem.solve (built on first use with the problem's
+        default options)."""
+        from ..solve.options import options_from
+
+        return self._solver_for(options_from(self.default_options))
+
+    def solve(self, method: Optional[str] = None, options=None, *, u0=None, progress=None, reference=None,
+              error_reference=None, **option_fields):
+        """Solve through the problem's kept Solver (problem.solver) with `options` (a SolverOptions or a
+        dict; None: the problem's defaults) and the `option_fields` on top (SolverOptions field names),
+        `method` first among them: problem.solve("nmg", tol=1e-10) is
+        Solver(problem).solve(options=SolverOptions(method="nmg", tol=1e-10)). A solve that asks for
+        other build-time options (local_smoothing, release_hierarchy) builds the kept solver again; the
+        kept solver stores its levels for the ordering of problem.default_options (None: coloured). Method "linear" with `reference` (a ContactResult) takes that result's contact state."""
+        from ..solve.options import for_method, options_from
+
+        base = options_from(self.default_options if options is None else options)
+        opts = for_method(base, base.method if method is None else method, **option_fields)
+        solver = self.solver
+        if _builds_differently(solver, opts):
+            solver = self._solver_for(opts, again=True)
+        if opts.method == "linear" and reference is not None:
+            return solver.solve_known_state(reference, opts, progress=progress, error_reference=error_reference)
+        return solver.solve(u0, options=opts, progress=progress, error_reference=error_reference)
+
+    def _solver_for(self, options, again: bool = False):
+        """The kept Solver; built with `options` where there is none yet, where it was built with
+        other build-time options than `options` asks for, or where `again`."""
+        from ..solve.solver import Solver
+
+        kept = self.__dict__.get("_kept_solver")
+        if again or kept is None or _builds_differently(kept, options):
+            kept = self.__dict__["_kept_solver"] = Solver(self, options, _kept=True)
+        return kept
+
 
 # Above this many dofs the coarse mesh of a hierarchy is not solved directly: coarser levels go
 # below it, down to COARSEN_DOWN_TO_NODES nodes (0027-coarse-level-size: a gmsh mesh of 7,032 dofs
@@ -822,6 +862,14 @@ MAX_COARSEST_DOFS = 4000
 # geometry (coincident surfaces measured between their projections give 1e-12): a touching contact.
 TOUCHING_GAP = 1e-9
 COARSEN_DOWN_TO_NODES = 200
+
+
+def _builds_differently(solver, options) -> bool:
+    """Do `options` ask for other build-time options than `solver` was built with?"""
+    from ..solve.options import BUILD_FIELDS
+
+    return any(getattr(options, k) is not None and getattr(options, k) != getattr(solver.options, k)
+               for k in BUILD_FIELDS)
 
 
 def _holds_rigid_motion(x: np.ndarray, fixed: np.ndarray) -> bool:

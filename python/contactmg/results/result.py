@@ -80,7 +80,7 @@ class ContactResult:
 
     @classmethod
     def from_raw(cls, problem, raw: dict, method: str) -> "ContactResult":
-        """The result of the core's raw output `raw` for `problem` (a ContactProblem)."""
+        """The result of the core's raw output `raw` for `problem` (a Problem)."""
         c = problem.contact
         state = np.full(problem.mesh.num_points, NOT_CONTACT, dtype=np.int8)
         state[c.nodes] = raw["state"]

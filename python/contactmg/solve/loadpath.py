@@ -21,7 +21,7 @@ import numpy as np
 
 from ..model.loads import assemble_load
 from ..model.problem import Dirichlet, Problem, dirichlet_arrays
-from .options import INT32_MAX, METHODS, for_method, options_from
+from .options import INT32_MAX, METHODS, for_method, options_from, resolve_options
 from .solver import Solver
 from ..results.result import SLIP, STICK, ContactResult
 
@@ -118,25 +118,31 @@ class LoadPath:
             load = assemble_load(p.mesh, bf, tr)
         return StepData(t, values, load)
 
-    def solve(self, method: str = "nmg", options=None, *, warm_start: bool = True, stop_on_failure: bool = True,
-              progress: Optional[Callable[[int, ContactResult], None]] = None, **option_fields) -> "PathResult":
-        """Solve every step by `method` ("nmg": Algorithm 2, "fixed-point": Algorithm 1) with the
-        incremental law from the previous step's solution, all on one Solver (one core, one
-        hierarchy: each step sets its load, Dirichlet values and slip origin). `options` (a
-        SolverOptions or a dict) and `option_fields` (tol, max_cycles, cycle, nu1, nu2, ...) as in
-        problem.solve. warm_start=False starts every step from u = 0 instead (same problem, same slip
-        origin: the reference for the cycle savings). A step that does not converge ends the path
-        (stop_on_failure) -- later steps would start from a state that is not a solution; the result
-        says so (converged False). `progress(step, result)` is called after every step."""
+    def solve(self, method: Optional[str] = None, options=None, *, warm_start: bool = True,
+              stop_on_failure: bool = True, progress: Optional[Callable[[int, ContactResult], None]] = None,
+              **option_fields) -> "PathResult":
+        """Solve every step by `method` ("nmg": Algorithm 2, "fixed-point": Algorithm 1; None: the
+        problem's default, as in problem.solve -- the method of `options` or, given none, of
+        problem.default_options, else the one resolve_options chooses for the problem, "nmg" where
+        that is "tnnmg", which takes no slip origin) with the incremental law from the previous
+        step's solution, all on one Solver (one core, one hierarchy: each step sets its load,
+        Dirichlet values and slip origin). `options` (a SolverOptions or a dict) and `option_fields`
+        (tol, max_cycles, cycle, nu1, nu2, ...) as in problem.solve. warm_start=False starts every
+        step from u = 0 instead (same problem, same slip origin: the reference for the cycle
+        savings). A step that does not converge ends the path (stop_on_failure) -- later steps would
+        start from a state that is not a solution; the result says so (converged False).
+        `progress(step, result)` is called after every step."""
+        p = self.problem
+        base = options_from(getattr(p, "default_options", None) if options is None else options)
+        if method is None:
+            method = base.method if base.method is not None else default_path_method(p, base.replace(**option_fields))
         if method not in PATH_METHODS:
             raise ValueError(f"a load path is solved by one of {PATH_METHODS}, got {method!r}"
                              + (" (the linear cost reference has no load path)" if method in METHODS else ""))
-        p = self.problem
         if p.law == "linear":
             raise ValueError("a load path needs a contact boundary (without contact the problem is linear: scale the solution)")
         if method == "fixed-point" and p.friction.law != "coulomb":
             raise ValueError("the fixed-point method (Algorithm 1) needs Coulomb friction")
-        base = options_from(getattr(p, "default_options", None) if options is None else options)
         opts = for_method(base, method, **option_fields)
         if progress is not None and not callable(progress):
             raise ValueError(f"progress must be a callable of (step, result), got {progress!r}")
@@ -169,6 +175,14 @@ class LoadPath:
 
         du = res.displacement if previous is None else res.displacement - previous
         return to_local(res.contact_frames, du[res.contact_nodes])[:, 1:]
+
+
+def default_path_method(problem: Problem, options=None) -> str:
+    """The method of a load path on `problem` whose `options` (None: the defaults) name none: the
+    one resolve_options chooses, but "nmg" where that is "tnnmg" -- TNNMG takes no slip origin (its
+    line search measures the friction term on u_T, not on the slip of the step)."""
+    chosen = resolve_options(problem, options).method
+    return "nmg" if chosen == "tnnmg" else chosen
 
 
 @dataclass
