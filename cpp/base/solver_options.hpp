@@ -69,12 +69,14 @@ constexpr int kSwitchFrom = 5, kSwitchWindow = 3;
 // A correction this many times larger than the first one ends a solve as diverged.
 constexpr double kDivergenceFactor = 1e8;
 
+// The defaults are the Python package's (contactmg.solve.options.SolverOptions; a test checks
+// every field against it), so a field a caller leaves out means the same in both.
 struct SolverOptions {
   Method method = Method::Nmg;
-  CycleType cycle = CycleType::V;
+  CycleType cycle = CycleType::F;
   int nu1 = 3, nu2 = 3;  // pre- and post-smoothing sweeps
-  double tol = 1e-11;    // stop when ||u^{k+1} - u^k||_A <= tol
-  double rtol = 0;       // ... or <= rtol * max(the first cycle's correction norm, ||u||_A)
+  double tol = 0;        // stop when ||u^{k+1} - u^k||_A <= tol
+  double rtol = 1e-10;   // ... or <= rtol * max(the first cycle's correction norm, ||u||_A)
   int max_cycles = 200;  // per solve (per Tresca solve inside the fixed point)
   // Over-relaxation of the unbounded block solves of every Gauss-Seidel sweep (fine level: nodes
   // without contact; coarse levels: rows without bounds); 1 = plain Gauss-Seidel. Nodal block
@@ -106,7 +108,7 @@ struct SolverOptions {
   // Gauss-Seidel order of every sweep (fine nonlinear, coarse projected). At construction it also
   // decides the storage: coloured stores every level but the coarsest by colours
   // (mg/renumbering.hpp), so that a coloured sweep streams memory.
-  Ordering ordering = Ordering::Lexicographic;
+  Ordering ordering = Ordering::Coloured;
   // Algorithm 2 (a law whose coarse problem freezes a bound): in every cycle but the first, level
   // L-1's matrix also carries the sliding nodes' Petrov-Galerkin coupling, with a fallback to the
   // symmetric one (steps/petrov_galerkin_coupling.hpp). Off by default: that coarse correction is
@@ -162,5 +164,12 @@ struct SolverOptions {
                        method_name(method));
   }
 };
+
+// Every field of SolverOptions by name, once: the bindings read and write the options dict from
+// this list (bindings/options.cpp), and the Python package's SolverOptions is checked against it.
+#define CMG_SOLVER_OPTION_FIELDS(X)                                                                              \
+  X(method) X(cycle) X(nu1) X(nu2) X(tol) X(rtol) X(max_cycles) X(omega) X(omega_post) X(fixed_point_tol)        \
+  X(fixed_point_max) X(fixed_point_stall_window) X(linear) X(lines) X(threads) X(ordering) X(petrov_galerkin)     \
+  X(upwind_contact_sweep) X(projected_coarse_correction) X(switch_rate)
 
 }  // namespace cmg

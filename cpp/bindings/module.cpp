@@ -8,6 +8,7 @@
 #include <malloc.h>
 #endif
 #include "bindings/common.hpp"
+#include "bindings/options.hpp"
 #include "base/parallel.hpp"
 
 PYBIND11_MODULE(_core, m) {
@@ -29,6 +30,8 @@ PYBIND11_MODULE(_core, m) {
   bind_anderson(m);
   m.def("openmp", [] { return have_openmp(); }, "whether the core was built with OpenMP threads");
   m.def("max_threads", [] { return max_threads(); }, "the cores the threads of a solve may use (threads=0)");
+  m.def("solver_option_defaults", [] { return bindings::options_to_dict(SolverOptions()); },
+        "every field of the core's SolverOptions with its default (the options a solve takes)");
   py::module_ testing = m.def_submodule("testing", "entry points for tests and benchmarks: the core's pieces on their own");
   bind_testing(testing);
 }

@@ -36,6 +36,22 @@ std::string str_option(py::handle v, const char* name) {
   return v.cast<std::string>();
 }
 
+// One reader and one writer per field type: the field list (CMG_SOLVER_OPTION_FIELDS) does the rest.
+void read(py::handle v, const char* n, int& x) { x = int_option(v, n); }
+void read(py::handle v, const char* n, double& x) { x = real_option(v, n); }
+void read(py::handle v, const char* n, bool& x) { x = bool_option(v, n); }
+void read(py::handle v, const char* n, Method& x) { x = parse_method(str_option(v, n)); }
+void read(py::handle v, const char* n, CycleType& x) { x = parse_cycle(str_option(v, n)); }
+void read(py::handle v, const char* n, Ordering& x) { x = parse_ordering(str_option(v, n)); }
+void read(py::handle v, const char* n, LinearCorrection& x) { x = parse_linear_correction(str_option(v, n)); }
+py::object value(int x) { return py::int_(x); }
+py::object value(double x) { return py::float_(x); }
+py::object value(bool x) { return py::bool_(x); }
+py::object value(Method x) { return py::str(method_name(x)); }
+py::object value(CycleType x) { return py::str(cycle_name(x)); }
+py::object value(Ordering x) { return py::str(ordering_name(x)); }
+py::object value(LinearCorrection x) { return py::str(linear_correction_name(x)); }
+
 }  // namespace
 
 // `base` with the keys of `options` (a dict, or None) set; a key of value None keeps base's value.
@@ -47,37 +63,15 @@ SolverOptions options_from_dict(py::handle options, SolverOptions o) {
       if (!py::isinstance<py::str>(item.first)) throw InputError("an option name must be a string");
       const std::string k = item.first.cast<std::string>();
       const py::handle v = item.second;
-      const char* n = k.c_str();
-      if (v.is_none()) {
-        static const char* known[] = {"method", "cycle", "nu1", "nu2", "tol", "rtol", "max_cycles", "omega", "omega_post",
-                                      "fixed_point_tol", "fixed_point_max", "fixed_point_stall_window", "linear", "lines",
-                                      "threads", "ordering", "petrov_galerkin", "upwind_contact_sweep",
-                                      "projected_coarse_correction", "switch_rate"};
-        if (std::find_if(std::begin(known), std::end(known), [&](const char* q) { return k == q; }) == std::end(known))
-          throw InputError("unknown option '" + k + "'");
-        continue;
-      }
-      if (k == "method") o.method = parse_method(str_option(v, n));
-      else if (k == "cycle") o.cycle = parse_cycle(str_option(v, n));
-      else if (k == "nu1") o.nu1 = int_option(v, n);
-      else if (k == "nu2") o.nu2 = int_option(v, n);
-      else if (k == "tol") o.tol = real_option(v, n);
-      else if (k == "rtol") o.rtol = real_option(v, n);
-      else if (k == "max_cycles") o.max_cycles = int_option(v, n);
-      else if (k == "omega") o.omega = real_option(v, n);
-      else if (k == "omega_post") o.omega_post = real_option(v, n);
-      else if (k == "fixed_point_tol") o.fixed_point_tol = real_option(v, n);
-      else if (k == "fixed_point_max") o.fixed_point_max = int_option(v, n);
-      else if (k == "fixed_point_stall_window") o.fixed_point_stall_window = int_option(v, n);
-      else if (k == "linear") o.linear = parse_linear_correction(str_option(v, n));
-      else if (k == "lines") o.lines = bool_option(v, n);
-      else if (k == "threads") o.threads = int_option(v, n);
-      else if (k == "ordering") o.ordering = parse_ordering(str_option(v, n));
-      else if (k == "petrov_galerkin") o.petrov_galerkin = bool_option(v, n);
-      else if (k == "upwind_contact_sweep") o.upwind_contact_sweep = bool_option(v, n);
-      else if (k == "projected_coarse_correction") o.projected_coarse_correction = bool_option(v, n);
-      else if (k == "switch_rate") o.switch_rate = real_option(v, n);
-      else throw InputError("unknown option '" + k + "'");
+      bool known = false;
+#define CMG_READ(name)                                \
+  if (k == #name) {                                   \
+    known = true;                                     \
+    if (!v.is_none()) read(v, #name, o.name);         \
+  }
+      CMG_SOLVER_OPTION_FIELDS(CMG_READ)
+#undef CMG_READ
+      if (!known) throw InputError("unknown option '" + k + "'");
     }
   }
   o.validate();
@@ -87,14 +81,9 @@ SolverOptions options_from_dict(py::handle options, SolverOptions o) {
 // The options a solve used, as a dict of SolverOptions field names.
 py::dict options_to_dict(const SolverOptions& o) {
   py::dict out;
-  out["method"] = method_name(o.method); out["cycle"] = cycle_name(o.cycle); out["nu1"] = o.nu1; out["nu2"] = o.nu2;
-  out["tol"] = o.tol; out["rtol"] = o.rtol; out["max_cycles"] = o.max_cycles; out["omega"] = o.omega;
-  out["omega_post"] = o.omega_post; out["fixed_point_tol"] = o.fixed_point_tol; out["fixed_point_max"] = o.fixed_point_max;
-  out["fixed_point_stall_window"] = o.fixed_point_stall_window; out["linear"] = linear_correction_name(o.linear);
-  out["lines"] = o.lines; out["threads"] = o.threads; out["ordering"] = ordering_name(o.ordering);
-  out["petrov_galerkin"] = o.petrov_galerkin; out["upwind_contact_sweep"] = o.upwind_contact_sweep;
-  out["projected_coarse_correction"] = o.projected_coarse_correction;
-  out["switch_rate"] = o.switch_rate;
+#define CMG_WRITE(name) out[#name] = value(o.name);
+  CMG_SOLVER_OPTION_FIELDS(CMG_WRITE)
+#undef CMG_WRITE
   return out;
 }
 

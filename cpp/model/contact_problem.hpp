@@ -147,8 +147,6 @@ class ContactProblem {
   double energy_offset() const { return energy_offset_; }
   // Over-relaxation of the fine sweeps at nodes without contact (SolverOptions::omega), set by the
   // solver for each solve.
-  double smoothing_omega() const { return omega_; }
-  void set_smoothing_omega(double omega) { check_omega_range(omega); omega_ = omega; }
   std::size_t memory_bytes() const {
     return A_.memory_bytes() + sizeof(double) * (f_.size() + gap_.size() * 3 + fixed_dof_values_.size()) + row_flags_.size() +
            sizeof(special_[0]) * special_.size() +
@@ -346,10 +344,6 @@ class ContactProblem {
   std::vector<double> coupled_load_;
   std::vector<TangentMask> free_;
   double energy_offset_ = 0;
-  double omega_ = 1.0;
-  static void check_omega_range(double omega) {
-    if (!(omega > 0 && omega < 2)) throw InputError("the over-relaxation omega must lie in (0, 2)");
-  }
 };
 
 }  // namespace cmg

@@ -188,10 +188,10 @@ class ContactSolver {
     return with_law(law_, [&](auto L) {
       start(u0, false);  // the fine level alone: the coarse levels stay as they are
       P_.set_bounds_to_coefficients();
-      P_.set_smoothing_omega(omega);
+      if (!(omega > 0 && omega < 2)) throw InputError("the over-relaxation omega must lie in (0, 2)");
       const SweepOrder& order = fine_order(ordering);
       for (int k = 0; k < sweeps; ++k)
-        NonlinearGaussSeidel<d, decltype(L)>::sweep(P_, it_.u.data(), k % 2 == 0, order, -1.0, per_row);
+        NonlinearGaussSeidel<d, decltype(L)>::sweep(P_, it_.u.data(), k % 2 == 0, order, omega, per_row);
       std::vector<double> u = it_.u;
       P_.basis().to_canonical(u.data());
       order_.back().to_user_in_place(u, d);
@@ -211,7 +211,6 @@ class ContactSolver {
       using Law = decltype(L);
       start(u0);
       P_.set_bounds_to_coefficients();
-      P_.set_smoothing_omega(cyc.omega);
       SolveResult R;
       // TNNMG takes no slip origin (load paths) and has nothing to add without contact
       const bool may_switch = cyc.switch_rate > 0 && Law::has_contact && !P_.has_slip_origin();
@@ -249,7 +248,6 @@ class ContactSolver {
       using Law = decltype(L);
       start(u0);
       P_.set_bounds_to_coefficients();
-      P_.set_smoothing_omega(cyc.omega);
       SolveResult R;
       TnnmgStep<d, Law> step(P_, H_, C_, built_, it_, cyc, fine_cycle(), fine_order(cyc.ordering));
       run_loop(step, cyc, reference, mon_, R, 0);
@@ -262,7 +260,6 @@ class ContactSolver {
   SolveResult solve_fixed_point(const double* u0, const SolverOptions& cyc, const double* reference) {
     if (law_ != Law::Coulomb) throw InputError("the fixed-point iteration needs a Coulomb friction law");
     start(u0);
-    P_.set_smoothing_omega(cyc.omega);
     SolveResult R;
     MonotoneMultigridStep<d, law::Tresca> tresca(P_, H_, C_, built_, it_, cyc, fine_order(cyc.ordering), tied_.get(), workspace());
     FixedPointStep<d> step(P_, tresca, it_);

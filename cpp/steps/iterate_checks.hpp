@@ -18,7 +18,9 @@ class IterateChecks {
   using Smoother = NonlinearGaussSeidel<d, L>;
 
  public:
-  IterateChecks(const ContactProblem<d>& P, FineIterate<d>& it, const SweepOrder& order) : P_(P), it_(it), order_(order) {}
+  // omega: the over-relaxation of the sweep that confirms a stop (the pre-smoothing's)
+  IterateChecks(const ContactProblem<d>& P, FineIterate<d>& it, const SweepOrder& order, double omega)
+      : P_(P), it_(it), order_(order), omega_(omega) {}
 
   // energy, contact counts and ||u||_A of the iterate into rec
   void record(CycleRecord& rec) const {
@@ -57,7 +59,7 @@ class IterateChecks {
     if constexpr (!L::has_contact) return std::numeric_limits<double>::quiet_NaN();
     std::vector<double>& u = it_.u;
     a = u;
-    Smoother::sweep(P_, u.data(), true, order_);
+    Smoother::sweep(P_, u.data(), true, order_, omega_);
     for (std::size_t k = 0; k < u.size(); ++k) std::swap(u[k], a[k]);
     for (std::size_t k = 0; k < u.size(); ++k) a[k] -= u[k];
     P_.matrix().multiply(a.data(), b.data());
@@ -70,6 +72,7 @@ class IterateChecks {
   const ContactProblem<d>& P_;
   FineIterate<d>& it_;
   const SweepOrder& order_;  // of the fine nonlinear sweeps
+  const double omega_;
 };
 
 }  // namespace cmg

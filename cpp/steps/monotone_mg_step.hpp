@@ -71,7 +71,7 @@ class MonotoneMultigridStep {
       : P_(P), H_(H), C_(C), built_(built), it_(it), opt_(opt), tied_(tied), ws_(work ? *work : own_),
         r_(ws_.r), old_(ws_.old), anderson_(ws_.anderson), pg_(H, opt.petrov_galerkin && L::coarse_freezes_bound),
         smoother_(P, fine_order, opt.upwind_contact_sweep && L::coarse_freezes_bound),
-        projected_(P, opt.projected_coarse_correction), checks_(P, it, fine_order) {
+        projected_(P, opt.projected_coarse_correction), checks_(P, it, fine_order, opt.omega) {
     const Index n = P.num_nodes() * d;
     mask_ = P.base_mask();
     r_.assign(n, 0.0); old_.assign(n, 0.0);  // of the same size: no new pages
@@ -92,7 +92,7 @@ class MonotoneMultigridStep {
     // on all threads: a plain vector copy was a serial pass over two fine vectors
     // (docs/dev/decisions/0003-coloured-gauss-seidel.md)
     parallel_for((Index)u.size(), [&](Index k) { old_[k] = u[k]; });
-    smoother_.smooth(P_, u.data(), opt_.nu1, true);
+    smoother_.smooth(P_, u.data(), opt_.nu1, true, opt_.omega);
     pc.lap(Phase::PreSmooth);
     const bool bounded = linearize();
     pc.lap(Phase::Linearize);
@@ -101,7 +101,7 @@ class MonotoneMultigridStep {
     pc.lap(Phase::CoarseUpdate);
     coarse_correction(bounded);
     pc.lap(Phase::CoarseCorrection);
-    smoother_.smooth(P_, u.data(), opt_.nu2, false, opt_.omega_post);
+    smoother_.smooth(P_, u.data(), opt_.nu2, false, opt_.post_omega());
     pc.lap(Phase::PostSmooth);
     const double step = accept(state_changed);
     pc.lap(Phase::Norm);

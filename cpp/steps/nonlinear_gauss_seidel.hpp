@@ -10,12 +10,12 @@ namespace cmg {
 
 template <int d, class L>
 struct NonlinearGaussSeidel {
-  // omega: the over-relaxation of the rows without contact (< 0: the problem's smoothing_omega();
-  // SolverOptions::omega_post gives the post-smoothing sweeps their own). per_row: every row through
-  // row_update, also on a level stored by colours (tests compare it with the range kernel).
-  static void sweep(const ContactProblem<d>& P, double* u, bool forward, const SweepOrder& order = SweepOrder(),
-                    double omega = -1.0, bool per_row = false) {
-    if (!(omega > 0)) omega = P.smoothing_omega();
+  // omega: the over-relaxation of the rows without contact, an argument of every sweep (the
+  // options' omega, or omega_post for the post-smoothing; never state of the problem). per_row:
+  // every row through row_update, also on a level stored by colours (tests compare it with the
+  // range kernel).
+  static void sweep(const ContactProblem<d>& P, double* u, bool forward, const SweepOrder& order, double omega,
+                    bool per_row = false) {
     if (order.contiguous() && !per_row) {
       order.visit_ranges(forward, [&](Index b, Index e) { sweep_range(P, u, b, e, omega); });
       return;
@@ -25,13 +25,13 @@ struct NonlinearGaussSeidel {
 
   // Row i, whatever it is: the law's nodal solve at a contact node, the diagonal block's inverse
   // (a special one where kept) elsewhere.
-  static void row_update(const ContactProblem<d>& P, double* u, Index i, double omega = -1.0) {
+  static void row_update(const ContactProblem<d>& P, double* u, Index i, double omega) {
     const BlockMatrix<d>& A = P.matrix();
     const Vec<d> b = local_rhs<d>(A, u, P.load().data(), i);
     VecMap<d> ui(u + d * i);
     const Index c = L::has_contact ? P.contact_of_node(i) : -1;
     if (c < 0) {
-      relaxed_assign<d>(ui, P.diagonal_inverse(i) * b, omega > 0 ? omega : P.smoothing_omega());
+      relaxed_assign<d>(ui, P.diagonal_inverse(i) * b, omega);
       return;
     }
     const Mat<d> B = A.block(A.diag[i]);

@@ -14,11 +14,11 @@ class SmootherChain {
  public:
   SmootherChain(const ContactProblem<d>& P, const SweepOrder& order, bool upwind) : order_(order), upwind_(P, order, upwind) {}
 
-  // `sweeps` sweeps in the direction `forward`, over-relaxed by omega (<= 0: the problem's)
-  void smooth(const ContactProblem<d>& P, double* u, int sweeps, bool forward, double omega = -1.0) {
+  // `sweeps` sweeps in the direction `forward`, over-relaxed by omega
+  void smooth(const ContactProblem<d>& P, double* u, int sweeps, bool forward, double omega) {
     for (int s = 0; s < sweeps; ++s) {
       Smoother::sweep(P, u, forward, order_, omega);
-      if (upwind_.on()) upwind_.visit(P, u);
+      if (upwind_.on()) upwind_.visit(P, u, omega);
     }
   }
 

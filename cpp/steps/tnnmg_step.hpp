@@ -49,7 +49,7 @@ class TnnmgStep {
             FineIterate<d>& it, const SolverOptions& opt, TruncatedLinearCycle<d>& fine_cycle,
             const SweepOrder& fine_order = SweepOrder())
       : P_(P), H_(H), C_(C), built_(built), it_(it), opt_(opt), lin_(fine_cycle), order_(fine_order),
-        checks_(P, it, fine_order) {
+        checks_(P, it, fine_order, opt.omega) {
     const Index n = P.num_nodes() * d;
     mask_ = P.base_mask();
     r_.assign(n, 0.0); w_.assign(n, 0.0); Aw_.assign(n, 0.0); old_.assign(n, 0.0); tmp_.assign(n, 0.0);
@@ -63,7 +63,7 @@ class TnnmgStep {
     const BlockMatrix<d>& A = P_.matrix();
     const std::vector<double>& f = P_.load();
     old_ = u;
-    for (int s = 0; s < opt_.nu1; ++s) Smoother::sweep(P_, u.data(), true, order_);
+    for (int s = 0; s < opt_.nu1; ++s) Smoother::sweep(P_, u.data(), true, order_, opt_.omega);
     pc.lap(Phase::PreSmooth);
     A.multiply(u.data(), tmp_.data());  // A u of the smoothed iterate
     for (std::size_t k = 0; k < r_.size(); ++k) r_[k] = f[k] - tmp_[k];
@@ -76,7 +76,7 @@ class TnnmgStep {
     decrease_ = frozen_decrease(u.data(), tmp_.data(), step_);
     for (std::size_t k = 0; k < u.size(); ++k) { u[k] += step_ * w_[k]; tmp_[k] += step_ * Aw_[k]; }
     pc.lap(Phase::CoarseCorrection);
-    for (int s = 0; s < opt_.nu2; ++s) Smoother::sweep(P_, u.data(), false, order_);
+    for (int s = 0; s < opt_.nu2; ++s) Smoother::sweep(P_, u.data(), false, order_, opt_.omega);
     pc.lap(Phase::PostSmooth);
     for (std::size_t k = 0; k < u.size(); ++k) old_[k] = u[k] - old_[k];
     A.multiply(old_.data(), tmp_.data());

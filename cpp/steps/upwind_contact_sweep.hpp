@@ -62,9 +62,9 @@ class UpwindContactSweep {
   bool on() const { return on_; }
   const std::vector<Index>& order() const { return order_; }  // fine rows, in visiting order
 
-  // the visit after a sweep
-  void visit(const ContactProblem<d>& P, double* u) const {
-    for (Index i : order_) NonlinearGaussSeidel<d, L>::row_update(P, u, i);
+  // the visit after a sweep, over-relaxed as the sweep (its rows are contact rows: exact nodal solves)
+  void visit(const ContactProblem<d>& P, double* u, double omega) const {
+    for (Index i : order_) NonlinearGaussSeidel<d, L>::row_update(P, u, i, omega);
   }
 
   // The order of the linearization whose sliding nodes are `coupling` (fine node -> w_p).
