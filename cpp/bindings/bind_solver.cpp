@@ -217,7 +217,7 @@ void bind_dim(py::module_& m) {
              out["cycle_type"] = std::string(cycle_name(co.cycle)) + "(" + std::to_string(co.nu1) + "," + std::to_string(co.nu2) + ")";
              out["ordering"] = ordering_name(co.ordering);
              out["omega"] = co.omega;
-             if (co.omega_post > 0) out["omega_post"] = co.omega_post;
+             if (co.post_omega() != co.omega) out["omega_post"] = co.post_omega();
              if (co.petrov_galerkin) out["petrov_galerkin"] = true;
              if (co.upwind_contact_sweep) out["upwind_contact_sweep"] = true;
              if (co.projected_coarse_correction) out["projected_coarse_correction"] = true;

@@ -34,6 +34,9 @@ DEFAULT_RTOL = 1e-10
 # build too, as the storage of the levels, but a solve may sweep in the other order on it: the same
 # answer, slower.)
 BUILD_FIELDS = ("local_smoothing", "release_hierarchy")
+# The fields of the package alone, which the core does not take: how the core is built, and where a
+# solve starts (made here: solve/nested.py).
+PACKAGE_ONLY = BUILD_FIELDS + ("start",)
 
 
 def _is_int(v) -> bool:
@@ -212,30 +215,15 @@ class SolverOptions:
         return out
 
     def to_core(self) -> dict:
-        """The core's options dict (cpp/bindings/options.cpp): the fields the core knows, those left
-        None omitted (the core's defaults), the switches of Algorithm 2 only where on and method is
-        "nmg" (the core refuses them for other methods)."""
-        out = {}
-        for f in dataclasses.fields(self):
-            v = getattr(self, f.name)
-            if f.name in ("local_smoothing", "release_hierarchy", "start") or v is None:
-                if f.name == "method":
-                    out["method"] = "nmg"  # unresolved (not through resolve_options): the core's default
-                continue
-            if f.name in ("petrov_galerkin", "upwind_contact_sweep", "projected_coarse_correction"):
-                if v and self.method == "nmg":
-                    out[f.name] = True
-                continue
-            if f.name == "fixed_point_stall_window" and not v:
-                continue
-            if f.name == "switch_rate" and not (v and self.method == "nmg"):
-                continue
-            if f.name == "omega_post" and v == self.omega:
-                continue  # the core's own default: the post-smoothing takes omega
-            out[f.name] = bool(v) if isinstance(v, np.bool_) else v
+        """The core's options dict (bindings/options.cpp): every field but the package's own
+        (PACKAGE_ONLY), those left None omitted (the core's default: the package's, or the core's own
+        choice for linear and lines), the stop as `stop` gives it, and method "linear" as the core's
+        "nmg" (the known-state problem is linear: the core's cycles without contact)."""
+        out = {f.name: (bool(v) if isinstance(v, np.bool_) else v) for f in dataclasses.fields(self)
+               if f.name not in PACKAGE_ONLY and (v := getattr(self, f.name)) is not None}
         out["tol"], out["rtol"] = self.stop
         if self.method == "linear":
-            out["method"] = "nmg"  # the known-state problem is linear: the core's cycles without contact
+            out["method"] = "nmg"
         return out
 
 
