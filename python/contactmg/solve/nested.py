@@ -20,6 +20,7 @@ from typing import List, Optional, Tuple
 import numpy as np
 
 from .. import _core
+from ..model.problem import _block_matrix, _bsr
 
 
 def injection(P) -> Optional[np.ndarray]:
@@ -43,16 +44,6 @@ def _galerkin(A, P, d: int):
     return (Pd.T @ A @ Pd).tocsr()
 
 
-def _block_matrix(A, d: int):
-    import scipy.sparse as sp
-
-    B = sp.bsr_matrix(A, blocksize=(d, d))
-    B.sort_indices()
-    cls = _core.BlockMatrix2D if d == 2 else _core.BlockMatrix3D
-    n = B.shape[0] // d
-    return cls(n, n, B.indptr.astype(np.int64), B.indices.astype(np.int64), np.ascontiguousarray(B.data))
-
-
 def _clip(u: np.ndarray, nodes: np.ndarray, normals: np.ndarray, gaps: np.ndarray) -> np.ndarray:
     """u with every contact node's normal displacement brought back onto its gap (an interpolated
     start may cut into the obstacle where the finer level's nodes are new)."""
@@ -74,8 +65,6 @@ def nested_start(problem, core_options: dict, build: dict, load: np.ndarray, fix
     each from the previous one's interpolated solution. Returns (start or None, record): None where
     the hierarchy has no injection, one level, or where the start's energy is not
     below that of u = 0 (the start only has to help; a monotone solve never loses what it gains)."""
-    import scipy.sparse as sp
-
     t0 = time.perf_counter()
     record = {"levels": [], "cycles": [], "converged": [], "work": 0.0, "seconds": 0.0}
     p = problem
@@ -96,7 +85,7 @@ def nested_start(problem, core_options: dict, build: dict, load: np.ndarray, fix
     where = np.full(n, -1, np.int64)
     where[c.nodes] = np.arange(len(c.nodes))
     A_fine, taken = p.take_matrix()
-    A = _bsr(A_fine, n, d)
+    A = _bsr(A_fine, n, d).tocsr()
     if taken:  # the solver holds its own copy: this one goes when the start is made
         del A_fine
     mats, loads = [None] * L, [None] * L
@@ -140,9 +129,3 @@ def nested_start(problem, core_options: dict, build: dict, load: np.ndarray, fix
     record["kept"] = True
     return start, record
 
-
-def _bsr(A, n: int, d: int):
-    import scipy.sparse as sp
-
-    return sp.bsr_matrix((np.asarray(A.data), np.asarray(A.indices), np.asarray(A.indptr)),
-                         shape=(n * d, n * d)).tocsr()
