@@ -61,10 +61,11 @@ def _energy(A, f: np.ndarray, u: np.ndarray) -> float:
 def nested_start(problem, core_options: dict, build: dict, load: np.ndarray, fixed_values: np.ndarray
                  ) -> Tuple[Optional[np.ndarray], dict]:
     """The start of a solve of `problem` (one body) on its finest level: its coarse levels solved
-    from the coarsest up (the coarsest, at most a direct solve's size, on its own) with the core's options `core_options` (a dict, as to_core gives),
-    each from the previous one's interpolated solution. Returns (start or None, record): None where
-    the hierarchy has no injection, one level, or where the start's energy is not
-    below that of u = 0 (the start only has to help; a monotone solve never loses what it gains)."""
+    from the coarsest up (the coarsest, at most a direct solve's size, on its own) with the core's
+    options `core_options` (a dict, as to_core gives), each from the previous one's interpolated
+    solution. Returns (start or None, record): None where the hierarchy has no injection or one
+    level, or where the start's energy is not below that of u = 0 (the start only has to help; a
+    monotone solve never loses what it gains)."""
     t0 = time.perf_counter()
     record = {"levels": [], "cycles": [], "converged": [], "work": 0.0, "seconds": 0.0}
     p = problem
