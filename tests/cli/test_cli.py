@@ -174,7 +174,7 @@ def test_ctrl_c_inside_the_cycles_stops_the_solve():
             "    if len(seen) == 1: print('READY', flush=True)\n"
             "t = time.time()\n"
             "try:\n"
-            "    s.solve(None, dict(tol=1e-300, max_cycles=100000), progress=progress)\n"
+            "    s.solve(None, dict(tol=1e-300, rtol=0, max_cycles=100000), progress=progress)\n"
             "except KeyboardInterrupt:\n"
             "    r = s.solve(None, dict(max_cycles=2))\n"
             "    print('interrupted after %.1f s, %d cycles; then %d' % (time.time() - t, len(seen), r['cycles']), flush=True)\n"
