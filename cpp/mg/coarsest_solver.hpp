@@ -89,6 +89,8 @@ class CoarsestSolver {
     xv = ldlt_.solve(bv);
   }
 
+  // whether the factorization in use is of the shifted matrix (S only semi-definite)
+  bool shifted() const { return shifted_; }
   int factorizations() const { return factorizations_; }
   Index rank() const { return (Index)K_.size(); }
   std::size_t memory_bytes() const {

@@ -192,12 +192,22 @@ class CoarseCycle {
     bool inside = true;
     for (Index k = 0; k < n; ++k) inside = inside && x[k] >= L.lo[k] && x[k] <= L.hi[k];
     if (inside) return;
-    // Start projected Gauss-Seidel from the clamped solution only if that beats x = 0 in energy,
-    // so that the coarse correction never raises the energy.
+    // Where the coarsest matrix is only semi-definite, the solution is huge along the motions
+    // nothing resists yet (a body its contacts hold, before it touches): clamping it leaves a
+    // distorted field that x = 0 beats, and the sweeps then move the body by its diagonal's share
+    // of the load a sweep (a block falling 0.5 onto its floor: 0.018 a cycle). The ray from 0
+    // along the solution up to the first bound it meets moves it as a whole onto the obstacle.
+    const Eigen::VectorXd ray = H_.coarsest_shifted() ? ray_to_first_bound(A, L, x, b) : Eigen::VectorXd();
+    // Start projected Gauss-Seidel from the clamped solution (or that ray's end) only if that beats
+    // x = 0 in energy, so that the coarse correction never raises the energy.
     for (Index k = 0; k < n; ++k) x[k] = std::max(L.lo[k], std::min(x[k], L.hi[k]));
     A.multiply(L.x.data(), L.r.data());
     double e = 0;
     for (Index k = 0; k < n; ++k) e += 0.5 * x[k] * L.r[k] - b[k] * x[k];
+    if (ray.size() && ray_energy_ < e) {
+      x = ray;
+      e = ray_energy_;
+    }
     if (!(e < 0)) x.setZero();
     double scale = 0;
     const SweepOrder lexicographic;
@@ -216,6 +226,28 @@ class CoarseCycle {
     }
   }
 
+  // alpha x* for the coarsest solution x* with alpha the energy's minimizer along it, cut at the
+  // first bound it meets (the bounds hold 0: the iterate is feasible); its energy to ray_energy_
+  Eigen::VectorXd ray_to_first_bound(const BlockMatrix<d>& A, Vectors& L, const Eigen::Map<Eigen::VectorXd>& x,
+                                     const Eigen::Map<const Eigen::VectorXd>& b) {
+    const Index n = (Index)L.x.size();
+    A.multiply(L.x.data(), L.r.data());
+    const Eigen::Map<const Eigen::VectorXd> Ax(L.r.data(), n);
+    const double quad = x.dot(Ax), slope = b.dot(x);
+    // (along a null motion quad is round-off, of either sign: the energy falls all the way)
+    double alpha = slope > 0 ? (quad > 0 ? std::min(1.0, slope / quad) : 1.0) : 0.0;
+    for (Index k = 0; k < n && alpha > 0; ++k) {
+      if (!(L.lo[k] <= 0 && L.hi[k] >= 0)) alpha = 0;
+      else if (x[k] > 0 && alpha * x[k] > L.hi[k]) alpha = L.hi[k] / x[k];
+      else if (x[k] < 0 && alpha * x[k] < L.lo[k]) alpha = L.lo[k] / x[k];
+    }
+    ray_energy_ = 0.5 * alpha * alpha * quad - alpha * slope;
+    Eigen::VectorXd out = alpha * x;
+    for (Index k = 0; k < n; ++k) out[k] = std::max(L.lo[k], std::min(out[k], L.hi[k]));  // round-off at the bound
+    return out;
+  }
+
+  double ray_energy_ = 0;
   Index serial_rows_ = 0;  // kSerialLevelRows in a correction (see cycle())
   bool serial_ = false;
   const GalerkinHierarchy<d>& H_;

@@ -63,6 +63,9 @@ class GalerkinHierarchy {
     });
   }
   int coarsest_factorizations() const { return coarsest_.factorizations(); }
+  // whether the coarsest matrix was only semi-definite (shifted by 1e-10 diag to factorize it): a
+  // body its contacts hold, with motions no truncated coarse function resists yet
+  bool coarsest_shifted() const { return coarsest_.shifted(); }
   int rebuilds() const { return rebuilds_; }
   // incremental updates since the last full rebuild (0: the levels are the Galerkin products of
   // the mask and Hessian they were built for, bit for bit)
