@@ -12,6 +12,8 @@ pure function of its size parameters returning a `contactmg.Problem`.
   onto a rigid plane, Coulomb 0.3 (structured triangles or a gmsh mesh of size h).
 - lone_block: a block given as a lone mesh (its only level), pressed 0.01 into a floor at its top,
   Coulomb 0.3 (2D triangles, 3D tetrahedra).
+- falling_lone_block: the falling block given as a lone mesh of 2n x n cells (its coarse levels made
+  from it).
 
 balance(result) is the largest component of the sum of the load, the reactions, the elastic
 supports' forces and the contact forces, relative to the load's.
@@ -39,6 +41,13 @@ def sideways_block(levels):
 
 def falling_block(levels):
     body = cm.Body(_block(levels, origin=(0.0, 0.5)), cm.Material(1000.0, 0.3), [], contact_tags=[RECT_BOTTOM],
+                   pressure={RECT_TOP: 1.0})
+    return cm.Problem(body, obstacle=FLOOR, friction=cm.Coulomb(0.3))
+
+
+def falling_lone_block(n):
+    mesh = cm.rectangle(2 * n, n, 2.0, 1.0, origin=(0.0, 0.5))
+    body = cm.Body(cm.MeshHierarchy.build(mesh, 1), cm.Material(1000.0, 0.3), [], contact_tags=[RECT_BOTTOM],
                    pressure={RECT_TOP: 1.0})
     return cm.Problem(body, obstacle=FLOOR, friction=cm.Coulomb(0.3))
 

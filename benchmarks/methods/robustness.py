@@ -11,9 +11,9 @@ coulomb  large friction coefficients on the adaptive Hertz hierarchy (levels 9 a
 held     bodies held only by their contacts, gaps to close, thin parts and lone meshes
          (benchmarks/held_scenes.py): a block pushed sideways (levels 3-7; default, nmg, tnnmg), a
          half plate on a cylinder (levels 3-6; frictionless, Coulomb), a block falling 0.5 onto the
-         floor (levels 3-6), a thin plate pressed across a gap (structured and two gmsh meshes,
-         levels 2-5, start zero and nested), lone meshes of 30 to 2e5 dofs: cycles and the balance
-         of load, reactions and contact forces.
+         floor (levels 3-6; and lone meshes of 2n x n cells, n = 8-64), a thin plate pressed across
+         a gap (structured and two gmsh meshes, levels 2-5, start zero and nested), lone meshes of
+         30 to 2e5 dofs: cycles and the balance of load, reactions and contact forces.
 
     python benchmarks/methods/robustness.py [--parts scenes coulomb held] [--level 7]
         [--cases adaptive9 uniform8 sphere3] [--quick] [--json PATH]
@@ -134,6 +134,7 @@ def held(quick):
         ((3, 4, 5, 6, 7), (3, 4, 5, 6), (3, 4, 5, 6), (2, 3, 4, 5))
     meshes = [("structured", None)] + ([] if quick else [("gmsh h 0.07", 0.07), ("gmsh h 0.05", 0.05)])
     lone2, lone3 = ((2, 8), (1, 5)) if quick else ((2, 5, 16, 64, 220), (1, 3, 8, 18, 30))
+    falling_lone = (8,) if quick else (8, 16, 32, 64)
     rows = []
     for L in sideways:
         for o in (None, {"method": "nmg"}, {"method": "tnnmg"}):
@@ -143,6 +144,8 @@ def held(quick):
         rows.append(one("plate on cylinder F 0.3", L, lambda: hs.plate_on_cylinder(L, cm.Coulomb(0.3))))
     for L in falling:
         rows.append(one("falling block", L, lambda: hs.falling_block(L)))
+    for n in falling_lone:
+        rows.append(one("falling block, lone mesh", f"n={n}", lambda: hs.falling_lone_block(n)))
     for name, h in meshes:
         mesh = hs.thin_plate_mesh(h)
         for L in thin:
