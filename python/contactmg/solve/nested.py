@@ -85,10 +85,8 @@ def nested_start(problem, core_options: dict, build: dict, load: np.ndarray, fix
     c = p.contact
     where = np.full(n, -1, np.int64)
     where[c.nodes] = np.arange(len(c.nodes))
-    A_fine, taken = p.take_matrix()
-    A = _bsr(A_fine, n, d).tocsr()
-    if taken:  # the solver holds its own copy: this one goes when the start is made
-        del A_fine
+    # assembled anew (the solver took the problem's matrix) and not kept by the problem: it goes with the start
+    A = _bsr(p.take_matrix()[0], n, d).tocsr()
     mats, loads = [None] * L, [None] * L
     mats[L - 1], loads[L - 1] = A, np.asarray(load, dtype=float)
     for k in range(L - 2, -1, -1):
