@@ -63,6 +63,9 @@ inline const char* linear_correction_name(LinearCorrection c) {
 // (triangles levels 3-7, quads 3-6, F = 0.4 and 5) 10, 50, 200 and 2000 gave the same cycle
 // counts, and 2000 (run to a relative change of 1e-14) cost 84 % of a quad level-3 solve.
 constexpr int kCoarsestMaxSweeps = 50;
+// Newton steps of the exact box solve that follows them on a coarsest level with free motions
+// (mg/box_qp.hpp): each finds more of the contact set, a handful is the rule.
+constexpr int kCoarsestNewtonSteps = 30;
 // The switch to TNNMG (switch_rate) looks at the contraction of the last kSwitchWindow cycles, from
 // cycle kSwitchFrom on (the first cycles settle the contact set and contract unevenly).
 constexpr int kSwitchFrom = 5, kSwitchWindow = 3;

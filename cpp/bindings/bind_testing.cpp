@@ -112,6 +112,14 @@ void bind_dim(py::module_& m) {
     return out;
   }, py::arg("s"), py::arg("u"), py::arg("free") = (int)all_tangents<d>(),
   "Hessian of s |u_T| (frame components, free tangential mask) at a sliding node");
+  m.def(("minimize_box_qp_" + sfx).c_str(), [](const BM& A, DArr b, DArr lo, DArr hi, DArr x0, int max_steps) {
+    if (A.rows != A.cols) throw InputError("the matrix must be square");
+    for (auto* a : {&b, &lo, &hi, &x0}) require_shape(*a, "vectors", {(py::ssize_t)A.rows, d});
+    std::vector<double> x(x0.data(), x0.data() + A.rows * d);
+    const int steps = minimize_box_qp<d>(A, b.data(), lo.data(), hi.data(), x.data(), max_steps, 1e-14);
+    return py::make_tuple(to_numpy(x, {(py::ssize_t)A.rows, d}), steps);
+  }, py::arg("A"), py::arg("b"), py::arg("lo"), py::arg("hi"), py::arg("x0"), py::arg("max_steps") = 30,
+     "The box QP min 1/2 x^T A x - b^T x, lo <= x <= hi (mg/box_qp.hpp) from the feasible x0 (n, d): (x, Newton steps)");
   m.def(("galerkin_product_" + sfx).c_str(), [](const BM& A, Index n_coarse, IArr ptr, IArr parent, DArr weight) {
     if (ptr.size() != A.rows + 1) throw InputError("ptr must have num_fine + 1 entries");
     Prolongation<d> P = make_prolongation<d>(A.rows, n_coarse, ptr.data(), parent.data(), weight.data());

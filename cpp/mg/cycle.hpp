@@ -6,6 +6,7 @@
 #pragma once
 #include <algorithm>
 #include "mg/bound_restriction.hpp"
+#include "mg/box_qp.hpp"
 #include "mg/hierarchy.hpp"
 #include "mg/line_smoother.hpp"
 #include "base/solver_options.hpp"
@@ -222,7 +223,8 @@ class CoarseCycle {
     const SweepOrder lexicographic;
     // (hashed: lexicographic, the gathered coarsest level's order in the distributed solver)
     const SweepOrder& all = opt.ordering == Ordering::Coloured ? coarsest_all_ : lexicographic;
-    for (int s = 0; s < kCoarsestMaxSweeps; ++s) {
+    bool settled = false;
+    for (int s = 0; s < kCoarsestMaxSweeps && !settled; ++s) {
       L.r = L.x;
       sweep(0, s % 2 == 0, all);
       double change = 0;
@@ -231,8 +233,14 @@ class CoarseCycle {
         change = std::max(change, std::abs(L.x[k] - L.r[k]));
         scale = std::max(scale, std::abs(L.x[k]));
       }
-      if (change <= 1e-14 * scale) break;
+      settled = change <= 1e-14 * scale;
     }
+    // On a semi-definite level (free motions) the sweeps contract at the rate of its smallest
+    // eigenvalue: what they leave undone, Newton steps on the free dofs finish (mg/box_qp.hpp).
+    // Not on a definite level whose solution merely overshoots a tiny bound (Hertz's first cycle),
+    // so that the paper's cases keep their bits.
+    if (H_.coarsest_shifted() && !settled)
+      minimize_box_qp<d>(A, L.b.data(), L.lo.data(), L.hi.data(), L.x.data(), kCoarsestNewtonSteps, 1e-14);
   }
 
   // alpha x* for the coarsest solution x* with alpha the energy's minimizer along it, cut at the

@@ -195,3 +195,46 @@ def test_cli_linear_correction():
     r = run("--linear", "pcg")
     assert r.returncode == 2 and "--linear chooses the linear correction of --method tnnmg" in r.stderr
     assert len(r.stderr.strip().splitlines()) == 1
+
+
+def _free_chain(n):
+    """A chain of n nodes joined by unit springs in x and y, held by nothing: K (x) I2, semi-definite
+    (the translations are free), as block CSR and dense."""
+    K = np.diag(np.r_[1.0, 2.0 * np.ones(n - 2), 1.0]) - np.eye(n, k=1) - np.eye(n, k=-1)
+    ptr, ind, data = [0], [], []
+    for i in range(n):
+        for j in range(max(0, i - 1), min(n, i + 2)):
+            ind.append(j); data.append(K[i, j] * np.eye(2))
+        ptr.append(len(ind))
+    return _core.BlockMatrix2D(n, n, np.array(ptr), np.array(ind), np.array(data)), np.kron(K, np.eye(2))
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_the_box_qp_of_a_semi_definite_level_meets_its_optimality_conditions(seed):
+    """The exact box solve of the coarsest level (mg/box_qp.hpp) on a chain that nothing holds but its
+    bounds: pushed down onto floors under some nodes (a body falling onto its obstacle), pulled
+    sideways by self-balanced forces. From x = 0 it ends at a point that meets the convex QP's
+    optimality conditions (feasible; gradient zero on the free dofs, pointing out of the box at
+    the bounds that hold), which makes it the minimizer, and its energy is below the start's."""
+    rng = np.random.default_rng(seed)
+    n = 12
+    A, dense = _free_chain(n)
+    b = np.zeros((n, 2))
+    b[:, 1] = -1.0 - rng.random(n)
+    b[:, 0] = rng.normal(size=n)
+    b[:, 0] -= b[:, 0].mean()
+    lo, hi = np.full((n, 2), -np.inf), np.full((n, 2), np.inf)
+    floors = rng.choice(n, size=3, replace=False)
+    lo[floors, 1] = -0.5 - 0.1 * rng.random(3)
+    lo[0, 0] = -2.0  # and a wall on the left
+    x, steps = _core.testing.minimize_box_qp_2D(A, b, lo, hi, np.zeros((n, 2)))
+    assert steps < 30
+    x, g = x.ravel(), dense @ x.ravel() - b.ravel()
+    lo, hi = lo.ravel(), hi.ravel()
+    scale = np.abs(b).max()
+    assert np.all(x >= lo) and np.all(x <= hi)
+    at_lo, at_hi = x <= lo, x >= hi
+    assert np.abs(g[~(at_lo | at_hi)]).max() <= 1e-10 * scale
+    assert np.all(g[at_lo] >= -1e-10 * scale) and np.all(g[at_hi] <= 1e-10 * scale)
+    assert 0.5 * x @ dense @ x - b.ravel() @ x < 0.0
+    assert at_lo[2 * floors + 1].any()  # it rests on a floor

@@ -170,3 +170,20 @@ def test_monotone_restriction_stays_a_bound(space):
             c = np.where(pick, np.where(np.isfinite(hc), hc, 0.0), np.where(np.isfinite(lc), lc, 0.0))
             v = P @ c
             assert np.all(v <= hi + 1e-14) and np.all(v >= lo - 1e-14)
+
+
+@pytest.mark.parametrize("make", [cm.MeshHierarchy.coarsened, cm.MeshHierarchy.aggregated])
+def test_a_small_mesh_coarsened_from_itself_gets_coarse_levels(make):
+    """A mesh of at most 200 nodes (the default coarsest size) still gets coarse levels, down to an
+    eighth of its nodes, as a lone mesh given to a Problem does: a block of 153 nodes that falls onto
+    its floor, held by nothing else, converges in a multigrid's cycles."""
+    mesh = cm.rectangle(16, 8, 2.0, 1.0, origin=(0.0, 0.5))
+    assert mesh.num_points <= 200
+    h = make(mesh)
+    assert h.levels >= 2 and len(h.transfers) == h.levels - 1
+    assert h.transfers[0].matrix().shape[1] <= mesh.num_points // 8
+    body = cm.Body(h, cm.Material(1000.0, 0.3), [], contact_tags=[cm.RECT_BOTTOM], pressure={cm.RECT_TOP: 1.0})
+    p = cm.Problem(body, obstacle=cm.PlaneObstacle((0.0, 0.0), (0.0, -1.0)), friction=cm.Coulomb(0.3))
+    res = p.solve()
+    assert res.converged and res.cycles <= 30, (res.cycles, res.status)
+    assert res.contact_forces()["obstacle"][1] == pytest.approx(2.0, rel=1e-8)

@@ -47,6 +47,22 @@ def test_a_block_falling_onto_the_floor_from_a_gap():
     assert res.displacement[:, 1].max() <= -0.01 + 1e-12   # it fell the whole gap
 
 
+@pytest.mark.parametrize("n", [4, 8, 16, 32])
+def test_a_lone_mesh_falls_onto_its_floor_in_multigrid_cycles(n):
+    """A block 0.5 above its floor, given as a lone mesh (coarse levels made from it), pressed down
+    and held by nothing else: its coarsest level is semi-definite and is solved exactly, so the
+    fall takes no extra cycles at any size (one size took 63 cycles while 50 projected sweeps were
+    all the coarsest level got). The floor carries the load, and the block fell the whole gap."""
+    mesh = cm.rectangle(2 * n, n, 2.0, 1.0, origin=(0.0, 0.5))
+    p = cm.Problem(cm.Body(cm.MeshHierarchy.build(mesh, 1), cm.Material(1000.0, 0.3), [], contact_tags=B,
+                           pressure={T: 1.0}), obstacle=FLOOR, friction=cm.Coulomb(0.3))
+    res = p.solve()
+    assert res.converged and res.cycles <= 30, (res.cycles, res.status)
+    assert res.contact_forces()["obstacle"][1] == pytest.approx(2.0, rel=1e-8)
+    assert res.displacement[:, 1].max() <= -0.5 + 1e-12
+    assert contact_conditions(p, res)["max"] < 1e-6
+
+
 @pytest.mark.parametrize("cell", ["tetra", "hexahedron"])
 def test_a_3d_box_on_the_floor_with_no_support(cell):
     h = cm.MeshHierarchy.build(cm.box(2, 2, 1, cell=cell), 3)

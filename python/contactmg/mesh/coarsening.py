@@ -25,7 +25,7 @@ from typing import List
 
 import numpy as np
 
-from .aggregation import node_graph
+from .aggregation import coarsest_nodes, node_graph
 from .mesh import Mesh, boundary_facets, facet_area_vectors
 
 
@@ -146,11 +146,13 @@ def _nearest_simplex(tri, x: np.ndarray):
     return out_s, out_b
 
 
-def coarsening_prolongations(mesh: Mesh, coarsest: int = 200) -> List:
+def coarsening_prolongations(mesh: Mesh, coarsest=None) -> List:
     """The prolongations (scipy CSR, fine x coarse) from the coarsest level to `mesh`, coarsest
-    first, of geometric coarsening (module docstring), down to at most `coarsest` nodes."""
+    first, of geometric coarsening (module docstring), down to at most `coarsest` nodes (None:
+    coarsest_nodes)."""
     import scipy.sparse as sp
 
+    coarsest = coarsest_nodes(mesh.num_points, mesh.dim, coarsest)
     if not (isinstance(coarsest, (int, np.integer)) and coarsest >= mesh.dim + 2):
         raise ValueError(f"coarsest must be a number of nodes of at least {mesh.dim + 2}, got {coarsest!r}")
     x = mesh.points

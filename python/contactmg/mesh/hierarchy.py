@@ -261,11 +261,11 @@ class MeshHierarchy:
         return len(self._transfers) + 1 if self.from_fine_mesh else len(self._meshes)
 
     @classmethod
-    def coarsened(cls, mesh: Mesh, coarsest: int = 200) -> "MeshHierarchy":
+    def coarsened(cls, mesh: Mesh, coarsest: Optional[int] = None) -> "MeshHierarchy":
         """Coarse levels made from the fine `mesh` alone by geometric coarsening
         (mesh/coarsening.py): nested node sets chosen from the mesh's nodes, the boundary's edges
         and corners first, interpolated by barycentric coordinates in their Delaunay simplices,
-        down to at most `coarsest` nodes. For a mesh as it comes from a mesher, with no coarse
+        down to at most `coarsest` nodes (None: 200, and an eighth of a mesh of fewer). For a mesh as it comes from a mesher, with no coarse
         mesh to refine; the default of a fine mesh alone (0029-geometric-coarsening). The
         hierarchy holds the fine mesh and the transfers (kind "coarsening")."""
         from .coarsening import coarsening_prolongations
@@ -273,9 +273,9 @@ class MeshHierarchy:
         return cls._from_fine(mesh, "coarsening", lambda: coarsening_prolongations(mesh, coarsest=coarsest))
 
     @classmethod
-    def aggregated(cls, mesh: Mesh, coarsest: int = 200, omega: float = 1.0) -> "MeshHierarchy":
+    def aggregated(cls, mesh: Mesh, coarsest: Optional[int] = None, omega: float = 1.0) -> "MeshHierarchy":
         """Coarse levels made from the fine `mesh` alone, by nonnegative smoothed aggregation
-        (mesh/aggregation.py) down to at most `coarsest` nodes. Fewer cycles than the geometric
+        (mesh/aggregation.py) down to at most `coarsest` nodes (None: as `coarsened`). Fewer cycles than the geometric
         coarsening on some meshes, but wider coarse stencils and a slower cycle
         (0025-aggregation-coarse-spaces). The hierarchy holds the fine mesh and the transfers
         (kind "aggregation")."""

@@ -773,11 +773,7 @@ class Problem:
             return
         from ..mesh.coarsening import coarsening_prolongations
 
-        # a lone mesh of few nodes still gets coarse levels (its sweeps alone took 55 cycles on 338
-        # dofs): down to an eighth of its nodes
-        n = coarse.num_points
-        coarsest = COARSEN_DOWN_TO_NODES if n > COARSEN_DOWN_TO_NODES else max(coarse.dim + 2, n // 8)
-        below = coarsening_prolongations(coarse, coarsest=coarsest)
+        below = coarsening_prolongations(coarse)
         if not below:
             return
         self.transfers = [Transfer.from_matrix(P) for P in below] + self.transfers
@@ -854,14 +850,13 @@ class Problem:
 
 
 # Above this many dofs the coarse mesh of a hierarchy is not solved directly: coarser levels go
-# below it, down to COARSEN_DOWN_TO_NODES nodes (0027-coarse-level-size: a gmsh mesh of 7,032 dofs
+# below it, down to aggregation.COARSEST_NODES nodes (0027-coarse-level-size: a gmsh mesh of 7,032 dofs
 # as the coarse level took 2.98 s, with aggregates below it 0.42 s; the paper's coarsest, 2,286 dofs
 # at most, stay as they are).
 MAX_COARSEST_DOFS = 4000
 # A weighted gap of a contact pair below this fraction of its node's facet size is round-off of the
 # geometry (coincident surfaces measured between their projections give 1e-12): a touching contact.
 TOUCHING_GAP = 1e-9
-COARSEN_DOWN_TO_NODES = 200
 
 
 def _builds_differently(solver, options) -> bool:
