@@ -8,6 +8,7 @@ pure function of its size parameters returning a `contactmg.Problem`.
 - plate_on_cylinder: a 2 x 0.2 half plate (E 1000: its free end would deflect by about 3) pressed by a
   pressure of 1 onto a rigid cylinder of radius 1 under its symmetry plane x = 0; nothing but the
   cylinder holds it vertically.
+- whole_plate_on_cylinder: the whole 4 x 0.2 plate, no supports, Coulomb 0.3 on the cylinder.
 - thin_plate: a 4 x 0.2 plate clamped at both ends, pressed by a pressure of 1 across a gap of 0.005
   onto a rigid plane, Coulomb 0.3 (structured triangles or a gmsh mesh of size h).
 - lone_block: a block given as a lone mesh (its only level), pressed 0.01 into a floor at its top,
@@ -57,6 +58,14 @@ def plate_on_cylinder(levels, friction=None):
     body = cm.Body(h, cm.Material(1000.0, 0.3), [cm.Dirichlet(RECT_LEFT, (0.0, None))], contact_tags=[RECT_BOTTOM],
                    pressure={RECT_TOP: 1.0})
     return cm.Problem(body, obstacle=cm.SphereObstacle((0.0, -1.0), 1.0), friction=friction)
+
+
+def whole_plate_on_cylinder(levels):
+    """The whole 4 x 0.2 plate (no symmetry plane) balanced on the cylinder, Coulomb 0.3: nothing but
+    the friction of the nodes it stands on holds its rocking."""
+    h = cm.MeshHierarchy.build(cm.rectangle(16, 2, 4.0, 0.2, origin=(-2.0, 0.0)), levels)
+    body = cm.Body(h, cm.Material(1000.0, 0.3), [], contact_tags=[RECT_BOTTOM], pressure={RECT_TOP: 1.0})
+    return cm.Problem(body, obstacle=cm.SphereObstacle((0.0, -1.0), 1.0), friction=cm.Coulomb(0.3))
 
 
 def thin_plate_mesh(h=None):

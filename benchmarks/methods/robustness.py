@@ -10,7 +10,8 @@ coulomb  large friction coefficients on the adaptive Hertz hierarchy (levels 9 a
          the uniform triangles at F = 5 (levels 8, 9) and the tetrahedral sphere (F = 0.4 and 40).
 held     bodies held only by their contacts, gaps to close, thin parts and lone meshes
          (benchmarks/held_scenes.py): a block pushed sideways (levels 3-7; default, nmg, tnnmg), a
-         half plate on a cylinder (levels 3-6; frictionless, Coulomb), a block falling 0.5 onto the
+         half plate on a cylinder (levels 3-6; frictionless, Coulomb) and the whole plate balanced on
+         it (Coulomb, no supports), a block falling 0.5 onto the
          floor (levels 3-6; and lone meshes of 2n x n cells, n = 8-64), a thin plate pressed across
          a gap (structured and two gmsh meshes, levels 2-5, start zero and nested), lone meshes of
          30 to 2e5 dofs: cycles and the balance of load, reactions and contact forces.
@@ -142,6 +143,7 @@ def held(quick):
     for L in plate:
         rows.append(one("plate on cylinder", L, lambda: hs.plate_on_cylinder(L)))
         rows.append(one("plate on cylinder F 0.3", L, lambda: hs.plate_on_cylinder(L, cm.Coulomb(0.3))))
+        rows.append(one("whole plate, cylinder, F 0.3", L, lambda: hs.whole_plate_on_cylinder(L)))
     for L in falling:
         rows.append(one("falling block", L, lambda: hs.falling_block(L)))
     for n in falling_lone:

@@ -5,6 +5,7 @@
 // does at each row what the serial sweep does there.
 #include <algorithm>
 #include "bindings/common.hpp"
+#include "mg/distributed_levels.hpp"
 #include "laws/law.hpp"
 #include "steps/nonlinear_gauss_seidel.hpp"
 
@@ -229,49 +230,6 @@ struct LocalContactLevel {
   }
 };
 
-// The gathered coarsest level (the same on every rank): the projected Gauss-Seidel passes of the
-// serial coarsest solve where the exact solution leaves the bounds, with the inverted diagonal blocks
-// of level_smoothers.hpp. `scale` (the largest diagonal entry of the level) sets the inert-dof
-// threshold.
-template <int d>
-struct LocalLevelSmoother {
-  BlockMatrix<d> A;
-  std::vector<double> Dinv;
-  std::vector<std::uint8_t> inert;
-
-  LocalLevelSmoother(const BlockMatrix<d>& M, double scale) : A(M) { invert_diagonal<d>(A, Dinv, inert, scale); }
-
-  // Projected passes over every row, forward and backward in turn, until one moves no entry by more
-  // than tol max|x| or after max_sweeps; returns the passes made. A row is bounded where a bound of
-  // it is finite.
-  int projected_sweeps(py::array_t<double>& x, const DArr& b, const DArr& lo, const DArr& hi, double omega, int max_sweeps, double tol) {
-    const Index n = A.rows;
-    if (!(omega > 0 && omega < 2)) throw InputError("omega must lie in (0, 2)");
-    double* xx = writable(x, "x", n * d);
-    require_shape(b, "b", {(py::ssize_t)n, d});
-    require_shape(lo, "lo", {(py::ssize_t)n, d});
-    require_shape(hi, "hi", {(py::ssize_t)n, d});
-    std::vector<std::uint8_t> bounded(n, 0);
-    for (Index q = 0; q < n * d; ++q)
-      if (std::isfinite(lo.data()[q]) || std::isfinite(hi.data()[q])) bounded[q / d] = 1;
-    py::gil_scoped_release free;
-    std::vector<double> before(n * d);
-    int s = 0;
-    while (s < max_sweeps) {
-      std::copy(xx, xx + n * d, before.begin());
-      projected_gs_sweep<d>(A, Dinv, bounded, inert, lo.data(), hi.data(), b.data(), xx, s % 2 == 0, SweepOrder(), omega);
-      ++s;
-      double change = 0.0, size = 0.0;
-      for (Index q = 0; q < n * d; ++q) {
-        change = std::max(change, std::abs(xx[q] - before[q]));
-        size = std::max(size, std::abs(xx[q]));
-      }
-      if (change <= tol * size) break;
-    }
-    return s;
-  }
-};
-
 template <int d>
 void bind_local(py::module_& m) {
   const std::string sfx = std::to_string(d) + "D";
@@ -309,13 +267,21 @@ void bind_local(py::module_& m) {
                              "T^T A T with the Dirichlet rows and columns eliminated (read-only view)")
       .def_property_readonly("load", [](const L& l) { return to_numpy(l.P.load(), {(py::ssize_t)l.n(), d}); })
       .def_property_readonly("base_mask", [](const L& l) { return to_numpy(l.P.base_mask(), {(py::ssize_t)l.n(), d}); });
-  using S = LocalLevelSmoother<d>;
-  py::class_<S>(m, ("LocalLevelSmoother" + sfx).c_str(), "The gathered coarsest level's projected Gauss-Seidel")
+  using S = GatheredCoarsestSmoother<d>;
+  py::class_<S>(m, ("GatheredCoarsestSmoother" + sfx).c_str(), "The gathered coarsest level's bounded correction")
       .def(py::init([](const BM& A, double scale) { return new S(A, scale); }), py::arg("A"), py::arg("scale"))
-      .def("projected_sweeps", &S::projected_sweeps, py::arg("x"), py::arg("b"), py::arg("lo"), py::arg("hi"), py::arg("omega"),
-           py::arg("max_sweeps"), py::arg("tol"),
-           "projected passes over every row, forward and backward in turn, until one moves no entry by more than "
-           "tol max|x| or max_sweeps; x (n, d) in place; returns the passes made");
+      .def("bound", [](S& s, py::array_t<double>& x, const DArr& b, const DArr& lo, const DArr& hi, double omega, bool shifted) {
+             const Index n = s.A.rows;
+             if (!(omega > 0 && omega < 2)) throw InputError("omega must lie in (0, 2)");
+             double* xx = writable(x, "x", n * d);
+             require_shape(b, "b", {(py::ssize_t)n, d});
+             require_shape(lo, "lo", {(py::ssize_t)n, d});
+             require_shape(hi, "hi", {(py::ssize_t)n, d});
+             py::gil_scoped_release free;
+             s.bound(xx, b.data(), lo.data(), hi.data(), omega, shifted);
+           }, py::arg("x"), py::arg("b"), py::arg("lo"), py::arg("hi"), py::arg("omega"), py::arg("shifted"),
+           "x (n, d): the exact solution in, the bounded correction out (mg/bounded_coarsest.hpp, the serial "
+           "cycle's); shifted: the factorization was shifted");
 }
 
 }  // namespace

@@ -97,6 +97,11 @@ void bind_dim(py::module_& m) {
            }),
            py::arg("rows"), py::arg("cols"), py::arg("indptr"), py::arg("indices"), py::arg("data"),
            "from block CSR arrays: rows, cols in blocks, data (nnz, d, d)")
+      .def("max_abs", [](const BM& A) {
+             double m = 0;
+             for (double v : A.values) m = std::max(m, std::abs(v));
+             return m;
+           }, "the largest absolute entry (the stiffness scale of the final check)")
       .def("memory_bytes", &BM::memory_bytes)
       .def("add_diagonal_blocks", [](BM& A, DArr blocks) {
         // e.g. the lumped stiffness of elastic supports (springs on boundary facets)

@@ -114,5 +114,6 @@ void bind_testing(py::module_& m);
 void bind_distributed(py::module_& m);
 void bind_anderson(py::module_& m);
 void bind_distributed_levels(py::module_& m);
+void bind_loop(py::module_& m);
 
 }  // namespace cmg::bindings

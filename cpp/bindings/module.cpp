@@ -1,7 +1,7 @@
 // The compiled core of contactmg: the module, its parts by subject (bind_fem.cpp, bind_solver.cpp,
 // bind_local_levels.cpp: one rank's part of a distributed cycle; bind_distributed.cpp: exact sums;
 // bind_distributed_levels.cpp: the coarse levels of a distributed cycle; bind_anderson.cpp: its
-// Anderson mixing) and
+// Anderson mixing; bind_loop.cpp: the solver's loop around a step given as callables) and
 // the submodule `testing` of the entry points only tests and benchmarks call (bind_testing.cpp).
 #include <cstdlib>  // defines __GLIBC__ where it is glibc
 #ifdef __GLIBC__
@@ -28,6 +28,7 @@ PYBIND11_MODULE(_core, m) {
   bind_distributed(m);
   bind_distributed_levels(m);
   bind_anderson(m);
+  bind_loop(m);
   m.def("openmp", [] { return have_openmp(); }, "whether the core was built with OpenMP threads");
   m.def("max_threads", [] { return max_threads(); }, "the cores the threads of a solve may use (threads=0)");
   m.def("solver_option_defaults", [] { return bindings::options_to_dict(SolverOptions()); },

@@ -6,18 +6,12 @@
 #pragma once
 #include <algorithm>
 #include "mg/bound_restriction.hpp"
-#include "mg/box_qp.hpp"
+#include "mg/bounded_coarsest.hpp"
 #include "mg/hierarchy.hpp"
 #include "mg/line_smoother.hpp"
 #include "base/solver_options.hpp"
 
 namespace cmg {
-
-// A coarsest solution that passes a bound by more than this factor is dominated by a motion its
-// matrix hardly resists (a body not yet touching, whose solution along that motion is of the order
-// of the load over round-off). No coarsest solve of the saved benchmark cases passes it: their
-// answers are bit for bit those without the ray.
-constexpr double kFreeMotionOvershoot = 1e4;
 
 template <int d>
 class CoarseCycle {
@@ -190,91 +184,15 @@ class CoarseCycle {
 
   void solve_coarsest(const SolverOptions& opt) {
     Vectors& L = lv_[0];
-    const BlockMatrix<d>& A = H_.matrix(0);
-    const Index n = (Index)L.x.size();
-    Eigen::Map<Eigen::VectorXd> x(L.x.data(), n);
-    Eigen::Map<const Eigen::VectorXd> b(L.b.data(), n);
     H_.solve_coarsest(L.b.data(), L.x.data());
     if (!L.any_bounds) return;
-    bool inside = true;
-    for (Index k = 0; k < n; ++k) inside = inside && x[k] >= L.lo[k] && x[k] <= L.hi[k];
-    if (inside) return;
-    // Where the coarsest matrix is semi-definite (or nearly: coarse levels made from a mesh leave
-    // its free motions at round-off, which the factorization's pivot test need not see), the
-    // solution is huge along the motions nothing resists yet (a body its contacts hold, before it
-    // touches): clamping it leaves a distorted field that x = 0 beats, and the sweeps then move the
-    // body by its diagonal's share of the load a sweep (a block falling 0.5 onto its floor: 0.018 a
-    // cycle). The ray from 0 along the solution up to the first bound it meets moves it as a whole
-    // onto the obstacle. Taken only there, so that a definite level keeps its path bit for bit.
-    const bool free_motion = H_.coarsest_shifted() || overshoot(L, x) > kFreeMotionOvershoot;
-    const Eigen::VectorXd ray = free_motion ? ray_to_first_bound(A, L, x, b) : Eigen::VectorXd();
-    // Start projected Gauss-Seidel from the clamped solution (or that ray's end) only if that beats
-    // x = 0 in energy, so that the coarse correction never raises the energy.
-    for (Index k = 0; k < n; ++k) x[k] = std::max(L.lo[k], std::min(x[k], L.hi[k]));
-    A.multiply(L.x.data(), L.r.data());
-    double e = 0;
-    for (Index k = 0; k < n; ++k) e += 0.5 * x[k] * L.r[k] - b[k] * x[k];
-    if (ray.size() && ray_energy_ < e) {
-      x = ray;
-      e = ray_energy_;
-    }
-    if (!(e < 0)) x.setZero();
-    double scale = 0;
     const SweepOrder lexicographic;
     // (hashed: lexicographic, the gathered coarsest level's order in the distributed solver)
     const SweepOrder& all = opt.ordering == Ordering::Coloured ? coarsest_all_ : lexicographic;
-    bool settled = false;
-    for (int s = 0; s < kCoarsestMaxSweeps && !settled; ++s) {
-      L.r = L.x;
-      sweep(0, s % 2 == 0, all);
-      double change = 0;
-      scale = 0;
-      for (Index k = 0; k < n; ++k) {
-        change = std::max(change, std::abs(L.x[k] - L.r[k]));
-        scale = std::max(scale, std::abs(L.x[k]));
-      }
-      settled = change <= 1e-14 * scale;
-    }
-    // On a semi-definite level (free motions) the sweeps contract at the rate of its smallest
-    // eigenvalue: what they leave undone, Newton steps on the free dofs finish (mg/box_qp.hpp).
-    // Not on a definite level whose solution merely overshoots a tiny bound (Hertz's first cycle),
-    // so that the paper's cases keep their bits.
-    if (H_.coarsest_shifted() && !settled)
-      minimize_box_qp<d>(A, L.b.data(), L.lo.data(), L.hi.data(), L.x.data(), kCoarsestNewtonSteps, 1e-14);
+    bound_coarsest_solution<d>(H_.matrix(0), L.b.data(), L.lo.data(), L.hi.data(), L.x.data(), L.r.data(),
+                               H_.coarsest_shifted(), [&](bool forward) { sweep(0, forward, all); });
   }
 
-  // alpha x* for the coarsest solution x* with alpha the energy's minimizer along it, cut at the
-  // first bound it meets (the bounds hold 0: the iterate is feasible); its energy to ray_energy_
-  Eigen::VectorXd ray_to_first_bound(const BlockMatrix<d>& A, Vectors& L, const Eigen::Map<Eigen::VectorXd>& x,
-                                     const Eigen::Map<const Eigen::VectorXd>& b) {
-    const Index n = (Index)L.x.size();
-    A.multiply(L.x.data(), L.r.data());
-    const Eigen::Map<const Eigen::VectorXd> Ax(L.r.data(), n);
-    const double quad = x.dot(Ax), slope = b.dot(x);
-    // (along a null motion quad is round-off, of either sign: the energy falls all the way)
-    double alpha = slope > 0 ? (quad > 0 ? std::min(1.0, slope / quad) : 1.0) : 0.0;
-    for (Index k = 0; k < n && alpha > 0; ++k) {
-      if (!(L.lo[k] <= 0 && L.hi[k] >= 0)) alpha = 0;
-      else if (x[k] > 0 && alpha * x[k] > L.hi[k]) alpha = L.hi[k] / x[k];
-      else if (x[k] < 0 && alpha * x[k] < L.lo[k]) alpha = L.lo[k] / x[k];
-    }
-    ray_energy_ = 0.5 * alpha * alpha * quad - alpha * slope;
-    Eigen::VectorXd out = alpha * x;
-    for (Index k = 0; k < n; ++k) out[k] = std::max(L.lo[k], std::min(out[k], L.hi[k]));  // round-off at the bound
-    return out;
-  }
-
-  // The largest factor by which the solution x passes a finite bound (0 where it passes none).
-  static double overshoot(const Vectors& L, const Eigen::Map<Eigen::VectorXd>& x) {
-    double out = 0;
-    for (Index k = 0; k < (Index)L.x.size(); ++k) {
-      if (x[k] > L.hi[k] && L.hi[k] > 0) out = std::max(out, x[k] / L.hi[k]);
-      if (x[k] < L.lo[k] && L.lo[k] < 0) out = std::max(out, x[k] / L.lo[k]);
-    }
-    return out;
-  }
-
-  double ray_energy_ = 0;
   Index serial_rows_ = 0;  // kSerialLevelRows in a correction (see cycle())
   bool serial_ = false;
   const GalerkinHierarchy<d>& H_;

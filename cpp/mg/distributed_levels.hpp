@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstring>
 #include <memory>
+#include "mg/bounded_coarsest.hpp"
 #include "mg/coarsest_solver.hpp"
 #include "mg/level_smoothers.hpp"
 #include "mg/sweep_order.hpp"
@@ -148,6 +149,32 @@ class GatheredCoarsestFactor {
   Index n_ = 0;
   std::size_t factor_entries_ = 0;
   bool shifted_ = false;
+};
+
+// The gathered coarsest level's bounded correction (the same on every rank): the serial cycle's
+// (mg/bounded_coarsest.hpp), its sweeps projected Gauss-Seidel over every row in global order with
+// the inverted diagonal blocks of level_smoothers.hpp. `scale` (the largest diagonal entry of the
+// level) sets the inert-dof threshold.
+template <int d>
+struct GatheredCoarsestSmoother {
+  BlockMatrix<d> A;
+  std::vector<double> Dinv, work;
+  std::vector<std::uint8_t> inert;
+
+  GatheredCoarsestSmoother(const BlockMatrix<d>& M, double scale) : A(M) { invert_diagonal<d>(A, Dinv, inert, scale); }
+
+  // x: the exact solution in, the bounded correction out; a row is bounded where a bound of it is finite.
+  void bound(double* x, const double* b, const double* lo, const double* hi, double omega, bool shifted) {
+    const Index n = A.rows;
+    std::vector<std::uint8_t> bounded(n, 0);
+    for (Index q = 0; q < n * d; ++q)
+      if (std::isfinite(lo[q]) || std::isfinite(hi[q])) bounded[q / d] = 1;
+    work.resize(n * d);
+    const SweepOrder all;
+    bound_coarsest_solution<d>(A, b, lo, hi, x, work.data(), shifted, [&](bool forward) {
+      projected_gs_sweep<d>(A, Dinv, bounded, inert, lo, hi, b, x, forward, all, omega);
+    });
+  }
 };
 
 }  // namespace cmg

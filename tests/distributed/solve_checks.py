@@ -2,7 +2,7 @@
 serial solver: small Hertz half disks and Hertz spheres, frictionless, Tresca and Coulomb, every
 cell type.
 `solve_case(name, comm)` returns what is compared: the gathered displacement (on rank 0), the cycle
-count, the correction norms and energies of every cycle."""
+count, the correction norms and energies of every cycle, and the final check's figures."""
 import numpy as np
 
 from contactmg.examples.distributed import hertz, sphere
@@ -40,4 +40,6 @@ def solve_case(name, comm):
     return {"u": u, "cycles": result.cycles, "converged": result.converged,
             "correction": np.array([h["correction_norm"] for h in result.history]),
             "energy": np.array([h["energy"] for h in result.history]),
-            "contact_nodes": problem.num_contact, "slip_nodes": result.slip_nodes, "rebuilds": result.rebuilds}
+            "contact_nodes": problem.num_contact, "slip_nodes": result.slip_nodes, "rebuilds": result.rebuilds,
+            "final_check": np.array([result.final_check[k] for k in sorted(result.final_check)])
+            if result.final_check is not None else np.zeros(0)}

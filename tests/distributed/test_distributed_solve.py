@@ -45,6 +45,7 @@ def test_one_rank_agrees_with_the_serial_solver(name):
     assert np.abs(got["u"] - ref.displacement).max() <= 1e-9 * scale
     assert abs(got["cycles"] - ref.cycles) <= 1
     assert got["correction"][-1] <= OPTIONS.tol
+    assert got["final_check"].max() <= 1e-6  # converged only after the final check
     if isinstance(CASES[name][3], Coulomb):  # sliding nodes: the Anderson-mixed cycles are exercised
         assert got["slip_nodes"] > 0 and got["slip_nodes"] == ref.counts()["slip_nodes"]
     else:  # a minimization: monotone, the energy never rises (round-off of the exact sums aside)
@@ -78,6 +79,8 @@ def test_every_rank_count_gives_the_one_rank_bits(ranks):
         assert np.array_equal(got["correction"], ref["correction"]), name
         assert np.array_equal(got["energy"], ref["energy"]), name
         assert np.array_equal(got["u"], ref["u"]), f"{name}: largest difference {np.abs(got['u'] - ref['u']).max()}"
+        # the final check's figures: maxima and exact sums over the ranks
+        assert np.array_equal(got["final_check"], ref["final_check"]), name
 
 
 @pytest.mark.skipif(bool(missing()), reason=missing() or "MPI available")
@@ -163,3 +166,64 @@ def test_an_empty_contact_boundary_is_refused_with_the_serial_message():
     with pytest.raises(DistributedError, match="no boundary facet carries the contact tags"):
         DistributedProblem(h, Material(_hertz.E, _hertz.NU), [Dirichlet([HERTZ_TOP], (0.0, -0.1))],
                            contact_tags=[987], obstacle=plane)
+
+
+@pytest.mark.parametrize("name", ["hertz-triangle-coulomb", "sphere-hexahedron-tresca"])
+def test_the_final_check_on_the_ranks_is_the_serial_check(name):
+    """The distributed final check (the ranks' owned rows, reduced) gives the serial check's figures
+    (results.checks.contact_conditions of the serial problem) for an iterate that violates every
+    condition: a converged solve's displacement with its contact nodes pushed into the obstacle and
+    the others moved off balance."""
+    from types import SimpleNamespace
+
+    from contactmg.distributed.final_check import final_check
+    from contactmg.results.checks import contact_conditions
+
+    example, levels, cell, friction, _, _ = CASES[name]
+    problem = example(levels, cell, friction, SerialComm())
+    result = problem.solve(OPTIONS)
+    fine, lev = problem.fine, problem.hierarchy.levels[-1]
+    # the solve's iterate in the cycle's storage (frame components at the contact nodes), perturbed
+    u = result.u.copy()
+    u[fine.contact_nodes] = np.einsum("cab,ca->cb", fine.frames, u[fine.contact_nodes])  # canonical -> frames
+    rng = np.random.default_rng(1)
+    scale = np.abs(u).max()
+    free = ~fine.fixed
+    free[fine.contact_nodes] = False
+    u[free] += 1e-3 * scale * rng.normal(size=np.count_nonzero(free))
+    u[fine.contact_nodes, 0] += 1e-3 * scale  # into the obstacle
+    got = final_check(fine, u, problem.comm)
+    # the same displacement in the serial problem's numbering and result
+    ref_solver = contactmg.Solver(serial_problem_of(name), OPTIONS.replace(method="nmg"))
+    ref = ref_solver.solve()
+    w = np.empty_like(u)
+    w[lev.gid] = fine.core.to_canonical(u)
+    want = contact_conditions(ref_solver.problem, SimpleNamespace(displacement=w, contact_frames=ref.contact_frames,
+                                                                  frame_fixed=ref.frame_fixed))
+    assert want["penetration"] > 1e-6 and want["interior"] > 1e-6 and want["balance"] > 1e-9
+    for k in want:
+        assert got[k] == pytest.approx(want[k], rel=1e-8, abs=1e-14), k
+
+
+def serial_problem_of(name):
+    example, levels, cell, friction, _, _ = CASES[name]
+    make = hertz_problem if example.__name__ == "hertz" else sphere_problem
+    p = make(cell, levels, 0.0)
+    return Problem(p.bodies[0], obstacle=p.obstacle, friction=friction)
+
+
+def test_options_not_distributed_are_refused_and_the_old_options_class_warns():
+    """A distributed solve takes SolverOptions; what its cycle does not have is refused with one line
+    (not ignored), and the former DistributedOptions name warns and is SolverOptions."""
+    from contactmg.distributed.problem import resolve
+    import contactmg.distributed as dist
+
+    for given, words in ((SolverOptions(method="tnnmg"), "method 'tnnmg' is not distributed yet"),
+                         (SolverOptions(start="nested"), "nested start is not distributed yet"),
+                         (SolverOptions(lines=True, method="tnnmg"), "not distributed yet")):
+        with pytest.raises(ValueError, match=words):
+            resolve(given, "triangle")
+    got = resolve(SolverOptions(omega=1.2), "quad")
+    assert (got.method, got.omega, got.omega_post, got.threads) == ("nmg", 1.2, 1.2, 1)
+    with pytest.warns(DeprecationWarning, match="SolverOptions"):
+        assert dist.DistributedOptions is SolverOptions

@@ -35,7 +35,6 @@ from .operators import (GatheredCoarsest, galerkin_rows, local_transfer, rotate_
 from .replicated import Whole, replicated_count
 
 INF = np.inf
-COARSEST_MAX_SWEEPS = 50  # the serial coarsest solve's (solver_options.hpp kCoarsestMaxSweeps)
 
 
 def _any(comm, flag: bool) -> bool:
@@ -303,24 +302,14 @@ class CoarseCorrection:
             L.sweep(False, opt.omega_post)
 
     def _solve_coarsest(self, opt) -> None:
-        """The serial solve_coarsest: the exact solve; where it leaves the bounds, projected
-        Gauss-Seidel from the clamped solution (or from zero, whichever has the lower energy)."""
+        """The serial solve_coarsest on the gathered level: the exact solve, then the core's bounded
+        correction where the solution leaves the bounds."""
         L, S, d = self.levels[0], self.coarsest, self.d
-        gid = L.level.gid
         b = S.gather(L.b)
-        x = S.solve(b)
+        x = np.ascontiguousarray(S.solve(b)).reshape(-1, d)
         if L.any_bounds:
-            lo, hi = S.gather(L.lo), S.gather(L.hi)
-            if not np.all((x >= lo) & (x <= hi)):
-                x = np.maximum(lo, np.minimum(x, hi))
-                e = 0.5 * float(x @ (S.A @ x)) - float(b @ x)
-                if not e < 0:
-                    x[:] = 0.0
-                xb = x.reshape(-1, d).copy()
-                S.projected_sweeps(xb, b.reshape(-1, d), lo.reshape(-1, d), hi.reshape(-1, d), opt.omega,
-                                   COARSEST_MAX_SWEEPS, 1e-14)
-                x = xb.ravel()
-        L.x[:] = x.reshape(-1, d)[gid]
+            S.bound(x, b.reshape(-1, d), S.gather(L.lo).reshape(-1, d), S.gather(L.hi).reshape(-1, d), opt.omega)
+        L.x[:] = x[L.level.gid]
 
 
 class DistributedMonotoneStep:
@@ -330,7 +319,8 @@ class DistributedMonotoneStep:
     settled cycles Anderson-mixed as in the serial step (steps/monotone_mg_step.hpp); returns
     ||u_new - u_old||_A (exact sums)."""
 
-    def __init__(self, comm, fine, hierarchy, opt):
+    def __init__(self, comm, fine, hierarchy, opt, whole_below: Optional[int] = None):
+        """opt: the resolved SolverOptions (problem.resolve); whole_below: replicated.py's choice."""
         self.comm, self.fine, self.opt = comm, fine, opt
         d = self.d = fine.d
         lev = fine.level
@@ -356,7 +346,7 @@ class DistributedMonotoneStep:
         self.f = fine.core.load
         P = local_transfer(lev, hierarchy.levels[-2], d, comm)
         P = rotate_rows(P, fine.contact_nodes, fine.frames, d)
-        self.coarse = CoarseCorrection(comm, hierarchy, d, P, opt.threads, opt.whole_below)
+        self.coarse = CoarseCorrection(comm, hierarchy, d, P, opt.threads, whole_below)
         # the coarse levels built at set-up for the Dirichlet truncation alone, as the serial solver
         # builds them: the first cycle's linearization updates only the rows it changes (the same
         # bits as a full build)
@@ -370,6 +360,7 @@ class DistributedMonotoneStep:
         self.phase_seconds = {k: 0.0 for k in ("pre_smooth", "linearize", "coarse_update", "coarse_correction",
                                                "post_smooth", "norm")}
         self.notes = []
+        self.rebuilt = False  # whether the last cycle rebuilt the coarse levels
         self.rebuilds = 0  # coarse rebuilds in the solve (the first cycle's update included, the set-up build not: the serial count)
         # Coulomb: the frozen bound leaves a slow linear contraction once the state settles
         # the serial step's Anderson mixing with its dot products as node sums over the ranks (bind_anderson.cpp)
@@ -502,7 +493,8 @@ class DistributedMonotoneStep:
             self.comm, self.built is None or not np.array_equal(mask, self.built[0]))
         changed = self.built is None or not (np.array_equal(mask, self.built[0]) and np.array_equal(hess_nodes, self.built[1])
                                              and np.array_equal(hess, self.built[2]))
-        if _any(self.comm, changed):
+        self.rebuilt = _any(self.comm, changed)
+        if self.rebuilt:
             self.coarse.build(self.fine, mask, hess_nodes, hess)
             self.built = key
             self.rebuilds += 1
@@ -531,7 +523,7 @@ class DistributedMonotoneStep:
             counts = np.sum(self.comm.allgather(counts), axis=0)
         norm = float(np.sqrt(max(quad, 0.0)))
         return {"energy": e, "solution_norm": norm, "active": int(counts[0]), "stick": int(counts[1]),
-                "slip": int(counts[2])}
+                "slip": int(counts[2]), "rebuilt": self.rebuilt}
 
     def sweep_change(self, u: np.ndarray) -> float:
         """||S(u) - u||_A for one forward nonlinear sweep S (u unchanged)."""

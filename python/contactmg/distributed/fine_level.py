@@ -73,7 +73,7 @@ class LocalFine:
         mesh = local_mesh(level, cell_type)
         d = self.d = mesh.dim
         n = mesh.num_points
-        self.level, self.mesh = level, mesh
+        self.level, self.mesh, self.material = level, mesh, material
         self.law = "linear" if not len(contact_tags) else friction.law
         A = _core.assemble_elasticity(mesh.points, mesh.cells, mesh.cell_type, material.E, material.nu)
         self.canonical_load = assemble_load(mesh, body_force, traction, pressure, (), gravity, material)

@@ -237,16 +237,16 @@ class GatheredCoarsest:
             out[i] = v
         return out.ravel()
 
-    def projected_sweeps(self, x: np.ndarray, b: np.ndarray, lo: np.ndarray, hi: np.ndarray, omega: float,
-                         max_sweeps: int, tol: float) -> int:
-        """Projected Gauss-Seidel passes over every row (global order), forward and backward in turn,
-        until one moves no entry by more than tol max|x| or after max_sweeps; x (n, d) in place."""
+    def bound(self, x: np.ndarray, b: np.ndarray, lo: np.ndarray, hi: np.ndarray, omega: float) -> None:
+        """x (n, d): the exact solution in, the correction within the bounds out, as the serial
+        coarsest solve makes it (the core's bound_coarsest_solution: projected sweeps from the best
+        start, the exact box solve where the level is semi-definite)."""
         d = self.d
         if self._smoother is None:
             from .. import _core
-            cls = _core.LocalLevelSmoother2D if d == 2 else _core.LocalLevelSmoother3D
+            cls = _core.GatheredCoarsestSmoother2D if d == 2 else _core.GatheredCoarsestSmoother3D
             self._smoother = cls(to_block_matrix(self.A, d), self.scale)
-        return self._smoother.projected_sweeps(x, b, lo, hi, omega, max_sweeps, tol)
+        self._smoother.bound(x, b, lo, hi, omega, self.factor.shifted)
 
     def memory_bytes(self) -> int:
         """The gathered matrix and its factor."""

@@ -28,32 +28,16 @@ from .comm import get_comm, is_serial, op, raise_together
 from .cycle import DistributedMonotoneStep
 from .fine_level import LocalFine, check_description
 
-# a stop on the correction norm is confirmed by one more sweep moving the iterate by at most this
-# many times the tolerance (loop_solver.hpp's kSweepCheckFactor)
-SWEEP_CHECK_FACTOR = 100.0
-DIVERGENCE_FACTOR = 1e8
 PHASES = ("pre_smooth", "linearize", "coarse_update", "coarse_correction", "post_smooth", "norm")
+# the fields of a cycle's record in DistributedResult.history
+RECORD_KEYS = ("cycle", "correction_norm", "energy", "solution_norm", "active", "stick", "slip", "seconds", "rebuilt")
 
 
-@dataclass
-class DistributedOptions:
-    """The options of a distributed solve, resolved from SolverOptions."""
-
-    cycle: str
-    nu1: int
-    nu2: int
-    omega: float
-    omega_post: float
-    tol: float
-    rtol: float
-    max_cycles: int
-    threads: int = 1  # per rank: the rows of one colour on this many threads
-    whole_below: Optional[int] = None  # coarse levels of at most this many nodes are held whole (None: by size and share)
-
-
-def resolve(options, cell_type: str) -> DistributedOptions:
-    """DistributedOptions from SolverOptions (None: the defaults); a ValueError for what is not
-    distributed yet."""
+def resolve(options, cell_type: str) -> SolverOptions:
+    """The SolverOptions of a distributed solve (None: the defaults) with what the ranks need
+    decided: the smoothing weights (omega_post as omega where not given) and the threads per rank
+    (one unless asked: ranks usually take a core each, and 0, the serial "every core", would put every
+    rank's threads on every core); a ValueError for what is not distributed yet."""
     o = options_from(options)
     if o.method not in (None, "nmg"):
         raise ValueError(f"method {o.method!r} is not distributed yet: the distributed solve is truncated monotone "
@@ -63,13 +47,21 @@ def resolve(options, cell_type: str) -> DistributedOptions:
             raise ValueError(f"{name} is not distributed yet: solve on one rank")
     if o.lines:
         raise ValueError("line smoothers are not distributed yet: solve on one rank")
+    if o.start == "nested":
+        raise ValueError("the nested start is not distributed yet: solve on one rank, or start from zero")
     omega = float(o.omega) if o.omega is not None else float(DEFAULT_OMEGA.get(cell_type, 1.0))
     post = float(o.omega_post) if o.omega_post is not None else omega
-    tol, rtol = o.stop
-    # threads per rank: ranks usually take a core each, so one thread unless asked (0, the serial
-    # default "every core", would put every rank's threads on every core)
-    threads = int(o.threads) if o.threads > 0 else 1
-    return DistributedOptions(o.cycle, o.nu1, o.nu2, omega, post, tol, rtol, o.max_cycles, threads)
+    return o.replace(method="nmg", omega=omega, omega_post=post, threads=int(o.threads) if o.threads > 0 else 1)
+
+
+def __getattr__(name):
+    if name == "DistributedOptions":
+        import warnings
+
+        warnings.warn("DistributedOptions is deprecated: a distributed solve takes SolverOptions (resolve() gives "
+                      "them with the ranks' choices made)", DeprecationWarning, stacklevel=2)
+        return SolverOptions
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 @dataclass
@@ -105,6 +97,10 @@ class DistributedResult:
     rebuilds: int = 0
     exchanges: int = 0     # halo exchanges of the solve on this rank (one per colour of a sweep, ...)
     whole_levels: int = 0  # coarse levels held whole by every rank
+    # the final check of a stop the cycles met (results.checks.contact_conditions' figures, the same
+    # on every rank) and its tolerance; None where the cycles did not stop
+    final_check: Optional[Dict[str, float]] = None
+    final_check_tol: Optional[float] = None
 
     @property
     def level(self):
@@ -187,7 +183,8 @@ class DistributedProblem:
               whole_below: Optional[int] = None) -> DistributedResult:
         """Truncated monotone multigrid from u = 0 until ||u^{k+1} - u^k||_A meets the stop of
         `options` (SolverOptions: tol / rtol, cycle, nu1, nu2, omega, max_cycles), confirmed by one
-        more sweep. `progress(record)` is called on rank 0 after each cycle. The coarse levels of at
+        more sweep and by the final check of the contact conditions and the balance (as a serial
+        solve's: `final_check` of the result). `progress(record)` is called on rank 0 after each cycle. The coarse levels of at
         most `whole_below` global nodes (and all below them) are held whole by every rank and swept
         without exchanges (0: none; None: the small levels whose whole size is a small share of a
         rank's fine level, replicated.py); the answer does not depend on it. Collective."""
@@ -197,40 +194,15 @@ class DistributedProblem:
             if whole_below is not None and (isinstance(whole_below, bool) or not isinstance(whole_below, (int, np.integer))
                                             or whole_below < 0):
                 raise ValueError(f"whole_below must be an integer >= 0 or None, got {whole_below!r}")
-            opt.whole_below = None if whole_below is None else int(whole_below)
         t0 = time.perf_counter()
-        step = DistributedMonotoneStep(comm, self.fine, self.hierarchy, opt)
+        step = DistributedMonotoneStep(comm, self.fine, self.hierarchy, opt, whole_below)
         build = time.perf_counter() - t0
         d, n = self.fine.d, len(self.fine.level.gid)
         u = np.zeros((n, d))
-        history: List[dict] = []
-        first = -1.0
-        status, converged = f"no convergence in {opt.max_cycles} cycles", False
         exchanges_before = step.exchanges()  # the solve's, not the set-up's
+        history: List[dict] = []
         t1 = time.perf_counter()
-        for it in range(1, opt.max_cycles + 1):
-            cn = step.iterate(u)
-            rec = step.record(u)
-            rec.update(cycle=it, correction_norm=cn, seconds=time.perf_counter() - t1)
-            history.append(rec)
-            if progress is not None and comm.rank == 0:
-                progress(dict(rec))
-            if first < 0:
-                first = cn
-            scale = max(first, rec["solution_norm"])
-            if not np.isfinite(cn) or (first > 0 and cn > DIVERGENCE_FACTOR * first):
-                status = (f"diverged: correction norm {cn:.3g} at cycle {it}" if np.isfinite(cn)
-                          else f"diverged: the iterate is no longer finite at cycle {it}")
-                break
-            if cn <= opt.tol or cn <= opt.rtol * scale:
-                sc = step.sweep_change(u)
-                allowed = SWEEP_CHECK_FACTOR * max(opt.tol, opt.rtol * scale)
-                if sc > allowed:
-                    status = (f"stalled: the cycle returns to an iterate (correction {cn:.3g}) that one more "
-                              f"smoothing sweep still moves by {sc:.3g} (energy norm)")
-                    break
-                status, converged = "converged", True
-                break
+        converged, status, check, check_tol = self._loop(step, u, opt, progress, history)
         seconds = time.perf_counter() - t1
         u_canonical = self.fine.core.to_canonical(u)
         out = DistributedResult(u_canonical, converged, status, len(history), history, seconds, build,
@@ -238,8 +210,42 @@ class DistributedProblem:
         out.rebuilds = step.rebuilds
         out.exchanges = step.exchanges() - exchanges_before
         out.whole_levels = step.whole_levels
+        out.final_check, out.final_check_tol = check, check_tol
         self._contact_zone(u, out)
         return out
+
+    def _loop(self, step, u: np.ndarray, opt, progress, history: List[dict]):
+        """The solver's loop (the core's run_loop: the stop, its sweep check, divergence) around the
+        ranks' cycle on u (in place), and the final check of a stop it meets, as the serial Solver
+        does: a check that fails goes on from the iterate while cycles are left, then gives the
+        verdict. Appends the cycles' records to `history`; returns (converged, status, check, tol)."""
+        from .. import _core
+        from ..solve.solver import FINAL_CHECK_RESTARTS, failed_check_status, final_check_tol
+        from .final_check import final_check
+
+        tol, rtol = opt.stop
+        report = progress if progress is not None and self.comm.rank == 0 else None
+        check, check_tol = None, None
+        for attempt in range(FINAL_CHECK_RESTARTS + 1):
+            left = opt.max_cycles - len(history)
+            if left <= 0:
+                break
+            raw = _core.run_loop(lambda: step.iterate(u), lambda: step.record(u), lambda: step.sweep_change(u),
+                                 {"tol": tol, "rtol": rtol, "max_cycles": left}, report)
+            first = len(history)
+            h = raw["history"]
+            for k in range(raw["cycles"]):
+                rec = {key: h[key][k].item() for key in RECORD_KEYS}
+                rec["cycle"] = first + k + 1
+                history.append(rec)
+            converged, status = bool(raw["converged"]), str(raw["status"])
+            if not converged:
+                return False, status, check, check_tol
+            check = final_check(self.fine, u, self.comm)
+            check_tol = final_check_tol(opt, h["correction_norm"][0], h["solution_norm"][-1])
+            if check["max"] <= check_tol:
+                return True, status, check, check_tol
+        return False, failed_check_status(check, check_tol), check, check_tol
 
     def _contact_zone(self, u: np.ndarray, out: DistributedResult) -> None:
         """The contact facts of `out` from this rank's owned contact nodes, summed or maximized

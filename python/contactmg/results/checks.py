@@ -68,81 +68,115 @@ def contact_conditions(problem, result, raise_on_violation: bool = False, tol: f
     ul = to_local(Q, w[c.nodes])
     vl = to_local(Q, slip[c.nodes])
     sl = to_local(Q, r[c.nodes])
-    # a tangential component fixed by a Dirichlet condition takes no part in friction: its force is a reaction
+    tied = np.zeros(ul.shape, bool)
     if len(c.nodes):
         tied = getattr(result, "frame_fixed", None)
         tied = (problem.solver.core.frame_fixed if tied is None else tied).astype(bool)
-        ul[tied], vl[tied], sl[tied] = 0.0, 0.0, 0.0
+    if stiffness is None:
+        stiffness = float(np.abs(problem.A.data).max(initial=0.0))
+    fixed = problem.fixed.astype(bool)
+    out = condition_violations(r, w, load, fixed, np.where(fixed, fixed_values, 0.0), c.nodes, c.gaps, ul, vl, sl,
+                               tied, problem.coefficients, problem.law, stiffness,
+                               getattr(problem, "body_id", np.zeros(len(w), np.int32)))
+    if raise_on_violation:
+        raise_violations(out, tol)
+    return out
+
+
+class SerialReduce:
+    """The reductions of condition_violations on one process: the maxima are the values, the sums
+    those of the arrays."""
+
+    @staticmethod
+    def max(values) -> np.ndarray:
+        """The values themselves."""
+        return np.asarray(values, float)
+
+    @staticmethod
+    def sum(arrays) -> np.ndarray:
+        """The sum of each array."""
+        return np.array([float(np.sum(a)) for a in arrays])
+
+
+def condition_violations(r, w, load, fixed, prescribed, contact_nodes, gaps, ul, vl, sl, tied, coefficients, law: str,
+                         stiffness: float, body, reduce=SerialReduce) -> Dict[str, float]:
+    """The relative violations of contact_conditions from arrays: the residual r = A w - f (n, d),
+    w, the load, the fixed dofs and their prescribed values (0 where free), the contact nodes with
+    their gaps, and w, the slip and r at them in their frames (ul, vl, sl (c, d)), the frame
+    components a Dirichlet condition ties (tied (c, d)), the friction coefficients (or Tresca
+    bounds), the law, max|A| and each node's body. `reduce` (max: of a list of values, entry by entry;
+    sum: of each array of a list, every entry) over every part of the problem lets a part of the
+    problem (an MPI rank's owned rows) give the figures of the whole: every array here is that
+    part's."""
+    ul, vl, sl = ul.copy(), vl.copy(), sl.copy()
+    # a tangential component fixed by a Dirichlet condition takes no part in friction: its force is a reaction
+    ul[tied], vl[tied], sl[tied] = 0.0, 0.0, 0.0
     # Forces are measured against the force scale of the problem, which the iterate cannot inflate:
     # the largest nodal load, and the iterate's largest contact force or reaction only up to the
     # stiffness times the largest prescribed displacement or initial penetration (the most a
     # displacement-driven body's supports or an interference fit call for). A scale
     # from the iterate's own reactions or contact forces grows with a runaway iterate and made its
     # violations look like round-off (|u| = 2e8, every violation below 1e-13).
-    fixed = problem.fixed.astype(bool)
-    prescribed = np.where(fixed, fixed_values, 0.0)
-    if stiffness is None:
-        stiffness = float(np.abs(problem.A.data).max(initial=0.0))
-    overlap = float(np.maximum(-np.asarray(c.gaps, float), 0.0).max(initial=0.0))
-    moved = stiffness * max(float(np.abs(prescribed).max(initial=0.0)), overlap)
+    gaps = np.asarray(gaps, float)
+    big = reduce.max([np.maximum(-gaps, 0.0).max(initial=0.0), np.abs(prescribed).max(initial=0.0),
+                      np.abs(sl[:, 0]).max(initial=0.0), np.abs(r[fixed]).max(initial=0.0),
+                      np.abs(load).max(initial=0.0), np.abs(w).max(initial=0.0), np.abs(gaps).max(initial=0.0)])
+    overlap, most_prescribed, contact_force, reaction, most_load, most_w, most_gap = (float(v) for v in big)
+    moved = stiffness * max(most_prescribed, overlap)
     # the iterate's own reactions and contact forces count up to that bound, no further
-    own = max(float(np.abs(sl[:, 0]).max(initial=0.0)), float(np.abs(r[fixed]).max(initial=0.0)))
-    scale = max(float(np.abs(load).max(initial=0.0)), min(own, moved))
+    own = max(contact_force, reaction)
+    scale = max(most_load, min(own, moved))
     if scale <= 1e-9 * moved:
         # its supports move it without loading it (lifted off its obstacle): forces of round-off,
         # measured against the stiffness times the prescribed displacement
         scale = moved
-    force_sum = max(float(np.abs(load).sum()), scale)
+    # equilibrium of each body: the residual left at its free dofs off the contact boundary, summed
+    # (what the reactions, contact forces and load fail to balance), against the load's total
+    free = ~fixed
+    free[contact_nodes] = False
+    held = np.where(free, r, 0.0)
+    columns = [held[body == b, a] for b in range(int(body.max(initial=0)) + 1) for a in range(w.shape[1])]
+    totals = reduce.sum(columns + [np.abs(load).ravel()])
+    sums, load_total = totals[:-1], float(totals[-1])
+    force_sum = max(load_total, scale)
     if scale == 0.0:
         # nothing loads the body: its solution is zero, and the stiffness times the iterate is what
         # round-off means
-        scale = force_sum = stiffness * float(np.abs(w).max(initial=0.0))
+        scale = force_sum = stiffness * most_w
     scale, force_sum = max(scale, 1e-300), max(force_sum, 1e-300)
-    free = ~fixed
-    free[c.nodes] = False
-    out = {"interior": float(np.abs(r[free]).max(initial=0.0)) / scale}
-    # equilibrium of each body: the residual left at its free dofs off the contact boundary, summed
-    # (what the reactions, contact forces and load fail to balance), against the load's total
-    body = getattr(problem, "body_id", np.zeros(len(w), np.int32))
-    sums = np.zeros((int(body.max(initial=0)) + 1, w.shape[1]))
-    np.add.at(sums, body, np.where(free, r, 0.0))
-    out["balance"] = float(np.abs(sums).max(initial=0.0)) / force_sum
     # The core's tests w_n == g and v_T == 0 are exact in its frames; rebuilt here from the canonical
     # u through a rotated frame (and T^{-1}) they carry round-off, hence the relative tolerance.
-    eps = 1e-12 * max(float(np.abs(w).max(initial=0.0)), float(np.abs(c.gaps).max(initial=0.0)), 1e-300)
-    active = ul[:, 0] >= c.gaps - eps
+    eps = 1e-12 * max(most_w, most_gap, 1e-300)
+    active = ul[:, 0] >= gaps - eps
     vt = np.linalg.norm(vl[:, 1:], axis=1)
     vt[vt <= eps] = 0.0
     st = np.linalg.norm(sl[:, 1:], axis=1)
-    law = problem.law
     # Where friction acts: Coulomb at nodes in contact (bound F |s_n|); Tresca at every contact node,
     # touching or not (its bound is given); frictionless nowhere.
     if law == "coulomb":
-        s, rubs = problem.coefficients * np.abs(sl[:, 0]), active
+        s, rubs = coefficients * np.abs(sl[:, 0]), active
     elif law == "tresca":
-        s, rubs = problem.coefficients, np.ones(len(c.nodes), bool)
+        s, rubs = np.asarray(coefficients, float), np.ones(len(gaps), bool)
     else:
-        s, rubs = np.zeros(len(c.nodes)), active
+        s, rubs = np.zeros(len(gaps)), active
     off = ~active
-    out["inactive_force"] = max(float(np.abs(sl[off, 0]).max(initial=0.0)),
-                                float(st[off & ~rubs].max(initial=0.0))) / scale
-    out["tension"] = max(0.0, float(sl[active, 0].max(initial=0.0))) / scale
-    out["friction_bound"] = max(0.0, float((st - s)[rubs].max(initial=0.0))) / scale
     slide = rubs & (vt > 0)
-    if np.any(slide):
-        dev = sl[slide, 1:] + s[slide, None] * vl[slide, 1:] / vt[slide, None]
-        out["slip_direction"] = float(np.linalg.norm(dev, axis=1).max()) / scale
-    else:
-        out["slip_direction"] = 0.0
+    dev = sl[slide, 1:] + s[slide, None] * vl[slide, 1:] / vt[slide, None] if np.any(slide) else np.zeros((0, 1))
+    worst = reduce.max([np.abs(r[free]).max(initial=0.0),
+                        max(np.abs(sl[off, 0]).max(initial=0.0), st[off & ~rubs].max(initial=0.0)),
+                        max(0.0, sl[active, 0].max(initial=0.0)),
+                        max(0.0, (st - s)[rubs].max(initial=0.0)),
+                        np.linalg.norm(dev, axis=1).max(initial=0.0),
+                        max(0.0, (ul[:, 0] - gaps).max(initial=0.0))])
+    out = {"interior": float(worst[0]) / scale, "balance": float(np.abs(sums).max(initial=0.0)) / force_sum,
+           "inactive_force": float(worst[1]) / scale, "tension": float(worst[2]) / scale,
+           "friction_bound": float(worst[3]) / scale, "slip_direction": float(worst[4]) / scale}
     # Not max |w_n|: on a tilted plane with zero gaps every w_n is round-off; nor max |w|, which a
     # runaway iterate sets. The displacement scale of the problem: its prescribed displacements, its
     # gaps, and the displacement its force scale makes at the stiffest entry of A.
-    disp = max(float(np.abs(prescribed).max(initial=0.0)), float(np.abs(c.gaps).max(initial=0.0)),
-               scale / max(stiffness, 1e-300), 1e-300)
-    out["penetration"] = max(0.0, float((ul[:, 0] - c.gaps).max(initial=0.0))) / disp
+    disp = max(most_prescribed, most_gap, scale / max(stiffness, 1e-300), 1e-300)
+    out["penetration"] = float(worst[5]) / disp
     out["max"] = max(out.values())
-    if raise_on_violation:
-        raise_violations(out, tol)
     return out
 
 

@@ -53,6 +53,21 @@ def _clip(u: np.ndarray, nodes: np.ndarray, normals: np.ndarray, gaps: np.ndarra
     return u
 
 
+def _below_lowest(problem) -> list:
+    """Coarse levels for the lowest stage, made from its mesh by geometric coarsening where the
+    lowest level is a mesh of the hierarchy (a refined one's coarse mesh), as a lone mesh gets them:
+    alone it would only be smoothed (200 cycles of its sweeps were the largest part of the nested
+    work on a thin plate's gmsh mesh). None where it is not a mesh (coarse levels made from the fine
+    mesh, or below the coarse mesh): those are small."""
+    from ..mesh.coarsening import coarsening_prolongations
+    from ..mesh.hierarchy import Transfer
+
+    h = problem.hierarchy
+    if h.from_fine_mesh or problem.coarse_levels_from_mesh():
+        return []
+    return [Transfer.from_matrix(P).as_tuple() for P in coarsening_prolongations(h.meshes[0])]
+
+
 def _energy(A, f: np.ndarray, u: np.ndarray) -> float:
     x = u.ravel()
     return float(0.5 * x @ (A @ x) - f.ravel() @ x)
@@ -109,7 +124,7 @@ def nested_start(problem, core_options: dict, build: dict, load: np.ndarray, fix
         if u is not None:
             u = _clip(Ps[k - 1] @ u, nodes, normals, gaps)
         core = cls(_block_matrix(mats[k], d), loads[k], fixed, values, nodes, normals, gaps, coefs, p.law,
-                   transfers[:k], build)
+                   transfers[:k] if k else _below_lowest(p), build)
         raw = core.solve(u, core_options)
         u = np.asarray(raw["u"])
         record["levels"].append(k)

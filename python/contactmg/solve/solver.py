@@ -32,6 +32,28 @@ FINAL_CHECK_FACTOR = 1e4
 FINAL_CHECK_RESTARTS = 2
 
 
+def final_check_tol(opts: SolverOptions, first_correction=None, solution_norm=None) -> float:
+    """The final check's tolerance for a solve stopped by `opts`: FINAL_CHECK_FACTOR times the stop's
+    relative level (an absolute tol relative to the larger of the first correction and ||u||_A), at
+    least VIOLATION_TOL."""
+    from ..results.checks import VIOLATION_TOL
+
+    tol_abs, rtol = opts.stop
+    if first_correction is not None:
+        size = max(float(first_correction), float(solution_norm or 0.0), 1e-300)
+        level = max(rtol, tol_abs / size)
+    else:
+        level = rtol
+    return max(VIOLATION_TOL, FINAL_CHECK_FACTOR * level)
+
+
+def failed_check_status(violations: dict, tol: float) -> str:
+    """The status of a solve whose stop was met but whose final check found `violations` above `tol`."""
+    worst = max((k for k in violations if k != "max"), key=violations.get)
+    return (f"not converged: the cycles' stop was met, but the final check finds {worst} {violations[worst]:.3g} "
+            f"(relative to the problem's force and displacement scales; tolerance {tol:.3g})")
+
+
 def _joined(first: dict, then: dict) -> dict:
     """The raw result of a solve that went on from `first` with `then`: then's iterate and figures,
     the cycles and history of both."""
@@ -193,11 +215,7 @@ class Solver:
             res.solve_seconds += nested["seconds"]
         if not passed:
             res.converged = False
-            v = res.extra["final_check"]
-            worst = max((k for k in v if k != "max"), key=v.get)
-            res.status = (f"not converged: the cycles' stop was met, but the final check finds {worst} {v[worst]:.3g} "
-                          f"(relative to the problem's force and displacement scales; tolerance "
-                          f"{res.extra['final_check_tol']:.3g})")
+            res.status = failed_check_status(res.extra["final_check"], res.extra["final_check_tol"])
         return res
 
     def _nested_start(self, opts: SolverOptions):
@@ -218,20 +236,15 @@ class Solver:
         """contact_conditions of `res` from the core's residual (no product with a matrix the core has
         taken over), against a tolerance that follows the stop asked for: VIOLATION_TOL at the
         default stop, looser for a looser one. The figures go to res.extra["final_check"]."""
-        from ..results.checks import VIOLATION_TOL, contact_conditions
+        from ..results.checks import contact_conditions
 
         v = contact_conditions(self.problem, res, residual=np.asarray(self.core.residual()),
                                stiffness=float(self.core.stiffness_scale()))
         if self.options.release_hierarchy:
             self.problem.release_vectors()  # the check made the load and the Dirichlet values again
-        tol_abs, rtol = opts.stop
         h = res.history
-        if len(h.get("correction_norm", ())):
-            size = max(float(h["correction_norm"][0]), float(h["solution_norm"][-1]), 1e-300)
-            level = max(rtol, tol_abs / size)
-        else:
-            level = rtol
-        tol = max(VIOLATION_TOL, FINAL_CHECK_FACTOR * level)
+        tol = final_check_tol(opts, h["correction_norm"][0] if len(h.get("correction_norm", ())) else None,
+                              h["solution_norm"][-1] if len(h.get("solution_norm", ())) else None)
         res.extra["final_check"], res.extra["final_check_tol"] = v, tol
         return v["max"] <= tol
 
