@@ -227,3 +227,23 @@ def test_options_not_distributed_are_refused_and_the_old_options_class_warns():
     assert (got.method, got.omega, got.omega_post, got.threads) == ("nmg", 1.2, 1.2, 1)
     with pytest.warns(DeprecationWarning, match="SolverOptions"):
         assert dist.DistributedOptions is SolverOptions
+
+
+def test_the_solver_of_a_distributed_problem_is_its_solve():
+    """contactmg.Solver takes a DistributedProblem as it takes a Problem: the same result as the
+    problem's own solve, bit for bit; per-solve changes as a dict; what is not distributed refused
+    when the solver is made."""
+    from contactmg.examples.distributed import hertz
+    from contactmg.distributed import DistributedSolver
+
+    p = hertz(3, "triangle", Coulomb(0.4), SerialComm())
+    solver = contactmg.Solver(p, {"cycle": "V"})
+    assert isinstance(solver, DistributedSolver) and solver.options.cycle == "V"
+    got, ref = solver.solve(), p.solve(SolverOptions(cycle="V"))
+    assert got.converged and got.cycles == ref.cycles and np.array_equal(got.u, ref.u)
+    short = solver.solve({"max_cycles": 2})
+    assert not short.converged and short.cycles == 2 and short.status == "no convergence in 2 cycles"
+    from contactmg.distributed import DistributedError
+
+    with pytest.raises(DistributedError, match="rank 0: ValueError: method 'tnnmg' is not distributed yet"):
+        contactmg.Solver(p, {"method": "tnnmg"})

@@ -13,14 +13,14 @@ from .colouring import colour_level
 from .exchange import Halo, exact_dot, exact_norm, exact_sum
 from .hierarchy import DistributedHierarchy, LocalLevel, LocalTransfer
 from .output import read_pvtu, write_gathered_vtu, write_pvtu
-from .problem import DistributedProblem, DistributedResult
+from .problem import DistributedProblem, DistributedResult, DistributedSolver
 from .partition import coordinate_bisection, partition, partition_cells
 from .transfer import prolong
 
 __all__ = ["DistributedError", "SerialComm", "abort_on_uncaught", "collective", "get_comm", "raise_together",
            "rank0_print", "colour_level", "Halo", "exact_dot", "exact_norm", "exact_sum", "DistributedHierarchy",
            "LocalLevel", "LocalTransfer", "coordinate_bisection", "partition", "partition_cells", "prolong",
-           "read_pvtu", "write_gathered_vtu", "write_pvtu", "DistributedProblem",
+           "read_pvtu", "write_gathered_vtu", "write_pvtu", "DistributedProblem", "DistributedSolver",
            "DistributedResult"]
 
 

@@ -174,6 +174,10 @@ class DistributedProblem:
         self.num_contact = int(contacts)
         self.assembly_seconds = time.perf_counter() - t0
 
+    def distributed_solver(self, options=None) -> "DistributedSolver":
+        """The solver contactmg.Solver(problem, options) makes for this problem. Collective."""
+        return DistributedSolver(self, options)
+
     @property
     def law(self) -> str:
         """The contact law solved: \"linear\" without contact tags, else the friction's."""
@@ -277,3 +281,23 @@ class DistributedProblem:
         every = [mine_c] if is_serial(comm) else comm.allgather(mine_c)
         out.central_pressure = min(every)[2]
         out.contact_nodes, out.stick_nodes, out.slip_nodes = (int(v) for v in counts)
+
+
+class DistributedSolver:
+    """contactmg.Solver(problem, options) of a DistributedProblem: the options resolved for the
+    ranks once (a ValueError on every rank for what is not distributed yet); solve() is the
+    problem's solve with them. Collective."""
+
+    def __init__(self, problem: DistributedProblem, options=None):
+        self.problem = problem
+        with raise_together(problem.comm):
+            self.options = resolve(options, problem.hierarchy.cell_type)
+
+    def solve(self, options=None, progress: Optional[Callable[[dict], None]] = None,
+              whole_below: Optional[int] = None) -> DistributedResult:
+        """DistributedProblem.solve with this solver's options (or `options`: a SolverOptions, or a
+        dict of changes to this solver's)."""
+        if isinstance(options, dict):
+            options = self.options.replace(**options)
+        return self.problem.solve(self.options if options is None else options, progress=progress,
+                                  whole_below=whole_below)

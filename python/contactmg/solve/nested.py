@@ -53,19 +53,33 @@ def _clip(u: np.ndarray, nodes: np.ndarray, normals: np.ndarray, gaps: np.ndarra
     return u
 
 
-def _below_lowest(problem) -> list:
-    """Coarse levels for the lowest stage, made from its mesh by geometric coarsening where the
-    lowest level is a mesh of the hierarchy (a refined one's coarse mesh), as a lone mesh gets them:
-    alone it would only be smoothed (200 cycles of its sweeps were the largest part of the nested
-    work on a thin plate's gmsh mesh). None where it is not a mesh (coarse levels made from the fine
-    mesh, or below the coarse mesh): those are small."""
+def _below_lowest(problem, nodes: np.ndarray) -> list:
+    """Coarse levels for the lowest stage (the fine nodes `nodes`), made by geometric coarsening as a
+    lone mesh gets them: alone it would only be smoothed (200 cycles of its sweeps were the largest
+    part of the nested work on a thin plate's gmsh mesh). From the hierarchy's coarse mesh where
+    that is the lowest level; else (coarse levels made from a mesh) from the Delaunay simplices of
+    its nodes, which serve the coarsening's node graph and interpolation only (the coarse problems
+    are algebraic)."""
     from ..mesh.coarsening import coarsening_prolongations
     from ..mesh.hierarchy import Transfer
+    from ..mesh.mesh import Mesh, boundary_facets
 
     h = problem.hierarchy
-    if h.from_fine_mesh or problem.coarse_levels_from_mesh():
-        return []
-    return [Transfer.from_matrix(P).as_tuple() for P in coarsening_prolongations(h.meshes[0])]
+    if not (h.from_fine_mesh or problem.coarse_levels_from_mesh()):
+        mesh = h.meshes[0]
+    else:
+        from scipy.spatial import Delaunay
+
+        points = problem.mesh.points[nodes]
+        d = points.shape[1]
+        try:
+            cells = Delaunay(points).simplices.astype(np.int64)
+        except Exception:  # (qhull: fewer nodes than a simplex, or all in a plane)
+            return []
+        cell_type = "triangle" if d == 2 else "tetra"
+        facets = boundary_facets(cells, cell_type)
+        mesh = Mesh._trusted(points, cells, cell_type, facets, np.zeros(len(facets), np.int64))
+    return [Transfer.from_matrix(P).as_tuple() for P in coarsening_prolongations(mesh)]
 
 
 def _energy(A, f: np.ndarray, u: np.ndarray) -> float:
@@ -76,7 +90,7 @@ def _energy(A, f: np.ndarray, u: np.ndarray) -> float:
 def nested_start(problem, core_options: dict, build: dict, load: np.ndarray, fixed_values: np.ndarray
                  ) -> Tuple[Optional[np.ndarray], dict]:
     """The start of a solve of `problem` (one body) on its finest level: its coarse levels solved
-    from the coarsest up (the coarsest, at most a direct solve's size, on its own) with the core's
+    from the coarsest up (the coarsest on coarse levels made from it: _below_lowest) with the core's
     options `core_options` (a dict, as to_core gives), each from the previous one's interpolated
     solution. Returns (start or None, record): None where the hierarchy has no injection or one
     level, or where the start's energy is not below that of u = 0 (the start only has to help; a
@@ -124,7 +138,7 @@ def nested_start(problem, core_options: dict, build: dict, load: np.ndarray, fix
         if u is not None:
             u = _clip(Ps[k - 1] @ u, nodes, normals, gaps)
         core = cls(_block_matrix(mats[k], d), loads[k], fixed, values, nodes, normals, gaps, coefs, p.law,
-                   transfers[:k] if k else _below_lowest(p), build)
+                   transfers[:k] if k else _below_lowest(p, fine_of[0]), build)
         raw = core.solve(u, core_options)
         u = np.asarray(raw["u"])
         record["levels"].append(k)

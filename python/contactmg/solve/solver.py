@@ -72,9 +72,18 @@ def _joined(first: dict, then: dict) -> dict:
 
 class Solver:
     """The core solver of `problem` (a Problem) with `options` (a SolverOptions, a dict of its
-    fields, or None: the defaults), built once here. Options fixed at the build (ordering,
+    fields, or None: the defaults), built once here. For a DistributedProblem, its
+    DistributedSolver (the same call on every rank). Options fixed at the build (ordering,
     local_smoothing, release_hierarchy; ordering as the storage of the levels) hold for every solve; the
     others may change per solve."""
+
+    def __new__(cls, problem=None, options=None, **kwargs):
+        # a problem on MPI ranks (contactmg.distributed.DistributedProblem) names its own solver:
+        # one way to solve every problem kind, without this layer importing the distributed one
+        make = getattr(problem, "distributed_solver", None)
+        if cls is Solver and callable(make):
+            return make(options)
+        return super().__new__(cls)
 
     def __init__(self, problem: Problem, options=None, *, _kept: bool = False):
         if not isinstance(problem, Problem):
