@@ -88,6 +88,23 @@ void bind_anderson(py::module_& m) {
            }, py::arg("x"), py::arg("gx"), py::arg("admit"), py::arg("restart") = false,
            "x: the iterate before the cycle, gx: G(x), replaced in place by the mixed iterate where admit(candidate, "
            "plain) accepts it (it may adjust the candidate); returns whether it did. restart: forget the history first")
+      .def("settle", [](NodeAnderson& a, const DArr& x, py::array_t<double>& gx, bool any_sliding, bool state_changed,
+                        double best_step, py::object change_norm, py::object admit, py::object keep_change) {
+             const Index n = (Index)x.size();
+             const int width = a.A.sums().width;
+             if (n != (Index)a.A.sums().rows.size() * width || (Index)gx.size() != n)
+               throw InputError("x and gx need " + std::to_string(a.A.sums().rows.size()) + " nodes of " + std::to_string(width) + " entries");
+             if (!(gx.flags() & py::array::c_style) || !gx.writeable()) throw InputError("gx must be a writable C-contiguous array");
+             return a.A.settle(
+                 x.data(), gx.mutable_data(), n, any_sliding, state_changed, best_step,
+                 [&] { return change_norm().cast<double>(); },
+                 [&](double* y, const double* plain) { return admit(view(y, n, width), view(plain, n, width)).cast<bool>(); },
+                 [&] { keep_change(); });
+           }, py::arg("x"), py::arg("gx"), py::arg("any_sliding"), py::arg("state_changed"), py::arg("best_step"),
+           py::arg("change_norm"), py::arg("admit"), py::arg("keep_change"),
+           "The settled-cycle rule around step() (steps/settled_anderson.hpp settle): change_norm() -> |G(x) - x|_A, "
+           "admit(candidate, plain) -> bool, keep_change() takes the measured change into A u; returns that step "
+           "where the state changed and the mixed iterate was refused, else -1")
       .def("reset", [](NodeAnderson& a) { a.A.reset(); }, "forget the history (a new contact state)")
       .def("memory_bytes", [](const NodeAnderson& a) { return a.A.memory_bytes(); }, "the bytes of the slots held");
 }

@@ -1,13 +1,11 @@
-// One rank's part of a distributed cycle (python/contactmg/distributed/cycle.py): its fine level as a
-// ContactProblem over its nodes and one layer of ghosts, swept on a given set of rows (the owned rows
-// of one colour, between two ghost exchanges) and linearized node by node; the gathered coarsest
-// level's projected Gauss-Seidel. The rows are those of the serial kernels: a distributed sweep
-// does at each row what the serial sweep does there.
+// One rank's part of a distributed cycle (python/contactmg/distributed/cycle.py), bound: its fine
+// level (steps/rank_fine_level.hpp) and the gathered coarsest level's bounded correction
+// (mg/distributed_levels.hpp). Shapes are checked here; the algorithms live in those headers.
 #include <algorithm>
 #include "bindings/common.hpp"
 #include "mg/distributed_levels.hpp"
 #include "laws/law.hpp"
-#include "steps/nonlinear_gauss_seidel.hpp"
+#include "steps/rank_fine_level.hpp"
 
 namespace cmg::bindings {
 
@@ -34,19 +32,15 @@ std::vector<Index> row_list(const IArr& rows, Index n) {
   return out;
 }
 
-// The fine level of one rank: the matrix of its local cells (owned rows complete, ghost rows partial
-// and never swept), its load, Dirichlet data and contact nodes (owned and ghost: an owned row reads
-// its ghost neighbours in their contact frames).
+// The Python face of one rank's fine level (steps/rank_fine_level.hpp): shapes checked, arrays
+// in and out, the GIL released around the passes over the matrix.
 template <int d>
 struct LocalContactLevel {
-  Law law;
-  ContactProblem<d> P;
+  RankFineLevel<d> F;
 
   LocalContactLevel(const BlockMatrix<d>& A, DArr f, BArr fixed, DArr fixed_values, IArr nodes, DArr normals, DArr gaps,
                     DArr coefficients, const std::string& law_name)
-      : law(parse_law(law_name)), P(make(A, f, fixed, fixed_values, nodes, normals, gaps, coefficients)) {
-    if (law == Law::Tresca) P.set_bounds_to_coefficients();
-  }
+      : F(make(A, f, fixed, fixed_values, nodes, normals, gaps, coefficients), parse_law(law_name)) {}
 
   static ContactProblem<d> make(const BlockMatrix<d>& A, DArr f, BArr fixed, DArr fixed_values, IArr nodes, DArr normals, DArr gaps,
                                 DArr coefficients) {
@@ -61,33 +55,18 @@ struct LocalContactLevel {
     return ContactProblem<d>(A, f.data(), fixed.data(), fixed_values.data(), cn, normals.data(), gaps.data(), coefficients.data());
   }
 
-  Index n() const { return P.num_nodes(); }
+  Index n() const { return F.n(); }
+  const ContactProblem<d>& problem() const { return F.P; }
 
-  // threads > 1: the rows are one colour (no two coupled), updated on that many threads; a row's
-  // update reads no row of its own colour, so the bits are those of one thread.
   void sweep(py::array_t<double>& u, const IArr& rows, bool forward, double omega, int threads) {
     double* x = writable(u, "u", n() * d);
     if (!(omega > 0 && omega < 2)) throw InputError("omega must lie in (0, 2)");
     if (threads < 1) throw InputError("threads must be >= 1");
     check_rows(rows, n());
     py::gil_scoped_release free;
-    if (threads == 1) {
-      with_law(law, [&](auto L) { NonlinearGaussSeidel<d, decltype(L)>::sweep_list(P, x, rows.data(), (Index)rows.size(), forward, omega); });
-      return;
-    }
-    // the list in one chunk per thread, each by the list kernel
-    const Index count = (Index)rows.size(), chunk = (count + threads - 1) / threads;
-    const Index* r = rows.data();
-    ThreadScope team(threads);
-    with_law(law, [&](auto L) {
-      parallel_for(threads, [&](Index t) {
-        const Index b = std::min(count, t * chunk), e = std::min(count, b + chunk);
-        NonlinearGaussSeidel<d, decltype(L)>::sweep_list(P, x, r + b, e - b, true, omega);
-      }, count >= kSerialColourRows ? 1 : threads + 1);
-    });
+    F.sweep(x, rows.data(), (Index)rows.size(), forward, omega, threads);
   }
 
-  // A v over every local row (the ghost rows partial: only the owned rows are complete)
   py::array_t<double> multiply(const DArr& v, int threads) const {
     require_shape(v, "v", {(py::ssize_t)n(), d});
     if (threads < 1) throw InputError("threads must be >= 1");
@@ -96,85 +75,44 @@ struct LocalContactLevel {
     const double* in = v.data();
     py::gil_scoped_release free;
     ThreadScope team(threads);
-    P.matrix().multiply(in, out);
+    F.P.matrix().multiply(in, out);
     return y;
   }
 
-  // f - A u on `rows` (zero elsewhere), with the row passes' prefetches
   py::array_t<double> residual(const DArr& u, const IArr& rows) const {
     require_shape(u, "u", {(py::ssize_t)n(), d});
     check_rows(rows, n());
     py::array_t<double> r({(py::ssize_t)n(), (py::ssize_t)d});
     double* out = r.mutable_data();
-    const BlockMatrix<d>& A = P.matrix();
-    const Index* list = rows.data();
-    const Index count = (Index)rows.size();
     py::gil_scoped_release free;
-    std::fill(out, out + n() * d, 0.0);
-    for (Index q = 0; q < count; ++q) A.residual_row(A.values.data(), u.data(), P.load().data(), list[q], kPrefetchValueRows, out + d * list[q]);
+    F.residual(u.data(), rows.data(), (Index)rows.size(), out);
     return r;
   }
 
-  // y = A (u - old) on the rows flagged in `rows`: written into `out` there (add: added to it), and
-  // the exact sum of the node values (u - old)_i . y_i (exact_node_dot's: the products of a node
-  // summed left to right): |u - old|_A^2 over these rows from one pass over the matrix, beside the
-  // kept A u it updates (the serial step's fused norm pass).
   py::int_ difference_product(const DArr& u, const DArr& old, py::array_t<double>& out, const BArr& rows, bool add) const {
     require_shape(u, "u", {(py::ssize_t)n(), d});
     require_shape(old, "old", {(py::ssize_t)n(), d});
     require_shape(rows, "rows", {(py::ssize_t)n()});
     double* y = writable(out, "out", n() * d);
-    const BlockMatrix<d>& A = P.matrix();
-    const double *x = u.data(), *z = old.data(), *vals = A.values.data();
-    const std::uint8_t* flag = rows.data();
     ExactAccumulator acc;
     {
       py::gil_scoped_release free;
-      ExactBins bins;
-      acc = exact_detail::sum_items(bins, A.rows, [&](Index i) {
-        if (!flag[i]) return;
-        A.prefetch_ahead(i, x, z);
-        prefetch_row_values<d>(vals, A.indptr.data(), i, kPrefetchValueRows, A.rows);
-        double w[d] = {};
-        accumulate_block_differences<d>(vals, A.indices.data(), A.indptr[i], A.indptr[i + 1], x, z, w);
-        double s = (x[d * i] - z[d * i]) * w[0];
-        for (int a = 1; a < d; ++a) s += (x[d * i + a] - z[d * i + a]) * w[a];
-        for (int a = 0; a < d; ++a) y[d * i + a] = add ? y[d * i + a] + w[a] : w[a];
-        if (!exact_detail::add_double(bins, s))
-          throw InputError("|u - old|_A^2 has a non-finite term at row " + std::to_string(i) + ": the iterate is no longer finite");
-      });
+      acc = F.difference_product(u.data(), old.data(), y, rows.data(), add);
     }
     return exact_int(acc);
   }
 
-  // The law's linearization at the contact nodes listed in `contacts` (indices into the contact list):
-  // the truncation mask (every node: the Dirichlet mask, the contact rows' own where linearized), the
-  // correction bounds and Hessian blocks (per contact node), the friction gradient added into r.
   py::tuple linearize(const DArr& u, py::array_t<double>& r, const IArr& contacts) const {
     require_shape(u, "u", {(py::ssize_t)n(), d});
     double* rr = writable(r, "r", n() * d);
-    const Index nc = P.num_contact();
+    const Index nc = F.P.num_contact();
     py::array_t<std::uint8_t> mask({(py::ssize_t)n(), (py::ssize_t)d});
-    std::copy(P.base_mask().begin(), P.base_mask().end(), mask.mutable_data());
     std::vector<double> lo(nc * d, -kInf), hi(nc * d, kInf), H(nc * d * d, 0.0);
-    bool bounded = false;
-    if (law != Law::Linear)
-      for (Index c : row_list(contacts, nc)) {
-        const Index k = P.contact_node(c) * d;
-        Mat<d> Hc = Mat<d>::Zero();
-        const auto body = [&](auto L) {
-          return linearize_node<decltype(L), d>(P.node(c), u.data() + k, rr + k, mask.mutable_data() + k, P.base_mask().data() + k,
-                                                lo.data() + c * d, hi.data() + c * d, &Hc, P.matrix().block(P.matrix().diag[P.contact_node(c)]));
-        };
-        if (with_law(law, body)) bounded = true;
-        std::copy(Hc.data(), Hc.data() + d * d, H.data() + c * d * d);
-      }
+    const bool bounded = F.linearize(u.data(), rr, row_list(contacts, nc), mask.mutable_data(), lo.data(), hi.data(), H.data());
     return py::make_tuple(mask, to_numpy(lo, {(py::ssize_t)nc, d}), to_numpy(hi, {(py::ssize_t)nc, d}),
                           to_numpy(H, {(py::ssize_t)nc, d, d}), bounded);
   }
 
-  // per contact node in `contacts`: state (0 free, 1 stick, 2 slip) and, given A u, the friction
-  // energy (its residual f - A u at the node; zero without)
   py::tuple contact_state(const DArr& u, const IArr& contacts, py::object Au) const {
     require_shape(u, "u", {(py::ssize_t)n(), d});
     DArr Av;
@@ -182,39 +120,24 @@ struct LocalContactLevel {
       Av = Au.cast<DArr>();
       require_shape(Av, "Au", {(py::ssize_t)n(), d});
     }
-    const std::vector<Index> cs = row_list(contacts, P.num_contact());
+    const std::vector<Index> cs = row_list(contacts, F.P.num_contact());
     std::vector<std::int8_t> state(cs.size(), 0);
     std::vector<double> energy(cs.size(), 0.0);
-    for (std::size_t m = 0; m < cs.size(); ++m) {
-      const Index c = cs[m], k = P.contact_node(c) * d;
-      state[m] = (std::int8_t)node_state<d>(P.node(c), u.data() + k);
-      if (Au.is_none()) continue;
-      const double r = P.load()[k] - Av.data()[k];
-      energy[m] = with_law(law, [&](auto L) -> double {
-        if constexpr (decltype(L)::has_contact) return friction_energy<decltype(L), d>(P.node(c), u.data() + k, r);
-        else return 0.0;
-      });
-    }
+    F.contact_state(u.data(), cs, Au.is_none() ? nullptr : Av.data(), state.data(), energy.data());
     return py::make_tuple(to_numpy(state, {(py::ssize_t)cs.size()}), to_numpy(energy, {(py::ssize_t)cs.size()}));
   }
 
-  // The Anderson step's mixed iterate y at the contact nodes listed in `contacts`, given the plain
-  // cycle's result u (laws/contact_node.hpp admit_mixed_node): y adjusted in place, and per node
-  // whether it admits y (the step is taken where every owned node on every rank does).
   py::array_t<std::uint8_t> admit_mixed(py::array_t<double>& y, const DArr& u, const IArr& contacts) const {
     double* yy = writable(y, "y", n() * d);
     require_shape(u, "u", {(py::ssize_t)n(), d});
-    const std::vector<Index> cs = row_list(contacts, P.num_contact());
+    const std::vector<Index> cs = row_list(contacts, F.P.num_contact());
     std::vector<std::uint8_t> ok(cs.size(), 1);
-    for (std::size_t m = 0; m < cs.size(); ++m) {
-      const Index k = P.contact_node(cs[m]) * d;
-      ok[m] = admit_mixed_node<d>(P.node(cs[m]), yy + k, u.data() + k);
-    }
+    F.admit_mixed(yy, u.data(), cs, ok.data());
     return to_numpy(ok, {(py::ssize_t)cs.size()});
   }
 
   py::array_t<double> frames() const {
-    const auto& T = P.basis();
+    const auto& T = F.P.basis();
     py::array_t<double> Q({(py::ssize_t)T.num_blocks(), (py::ssize_t)d, (py::ssize_t)d});
     for (Index c = 0; c < T.num_blocks(); ++c)
       for (int a = 0; a < d; ++a)
@@ -225,7 +148,7 @@ struct LocalContactLevel {
   py::array_t<double> to_canonical(const DArr& u) const {
     require_shape(u, "u", {(py::ssize_t)n(), d});
     std::vector<double> v(u.data(), u.data() + n() * d);
-    P.basis().to_canonical(v.data());
+    F.P.basis().to_canonical(v.data());
     return to_numpy(v, {(py::ssize_t)n(), d});
   }
 };
@@ -245,7 +168,7 @@ void bind_local(py::module_& m) {
            "`rows` are one colour, updated on that many threads")
       .def("residual", &L::residual, py::arg("u"), py::arg("rows"), "f - A u on rows (zero elsewhere)")
       .def("multiply", &L::multiply, py::arg("v"), py::arg("threads") = 1, "A v on every local row (owned rows complete)")
-      .def_property_readonly("memory_bytes", [](const L& l) { return l.P.memory_bytes(); },
+      .def_property_readonly("memory_bytes", [](const L& l) { return l.problem().memory_bytes(); },
                              "bytes of the level's matrix, load, Dirichlet and contact data")
       .def("linearize", &L::linearize, py::arg("u"), py::arg("r"), py::arg("contacts"),
            "(mask, lo, hi, hessian, bounded) at the given contact nodes; the friction gradient is added into r")
@@ -262,11 +185,11 @@ void bind_local(py::module_& m) {
       .def("to_canonical", &L::to_canonical, py::arg("u"))
       // a view, not a copy: the Galerkin kernel reads it at every rebuild (every cycle under 3D
       // Coulomb friction, where a copy of the fine matrix per cycle showed)
-      .def_property_readonly("matrix", [](const L& l) -> const BM& { return l.P.matrix(); },
+      .def_property_readonly("matrix", [](const L& l) -> const BM& { return l.problem().matrix(); },
                              py::return_value_policy::reference_internal,
                              "T^T A T with the Dirichlet rows and columns eliminated (read-only view)")
-      .def_property_readonly("load", [](const L& l) { return to_numpy(l.P.load(), {(py::ssize_t)l.n(), d}); })
-      .def_property_readonly("base_mask", [](const L& l) { return to_numpy(l.P.base_mask(), {(py::ssize_t)l.n(), d}); });
+      .def_property_readonly("load", [](const L& l) { return to_numpy(l.problem().load(), {(py::ssize_t)l.n(), d}); })
+      .def_property_readonly("base_mask", [](const L& l) { return to_numpy(l.problem().base_mask(), {(py::ssize_t)l.n(), d}); });
   using S = GatheredCoarsestSmoother<d>;
   py::class_<S>(m, ("GatheredCoarsestSmoother" + sfx).c_str(), "The gathered coarsest level's bounded correction")
       .def(py::init([](const BM& A, double scale) { return new S(A, scale); }), py::arg("A"), py::arg("scale"))

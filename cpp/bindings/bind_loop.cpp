@@ -1,9 +1,11 @@
-// The one loop (solver/loop_solver.hpp) around a step given as Python callables: the distributed
-// solve's cycle takes the serial solver's stop, sweep check, divergence test and messages from
-// here, not from a copy of them.
+// The one loop (solver/loop_solver.hpp) around a step given as Python callables, and the one
+// multigrid recursion (mg/cycle_recursion.hpp) over levels given as a Python object: the
+// distributed solve's cycle takes the serial solver's stop, sweep check, divergence test, messages
+// and recursion from here, not from copies of them.
 #include <limits>
 #include <utility>
 #include "bindings/options.hpp"
+#include "mg/cycle_recursion.hpp"
 #include "solver/loop_solver.hpp"
 
 namespace cmg::bindings {
@@ -35,9 +37,31 @@ struct CallableStep {
   double sweep_change() { return sweep_change_().cast<double>(); }
 };
 
+// The level operations of mg/cycle_recursion.hpp as the methods of a Python object.
+struct PythonLevels {
+  py::object levels;
+
+  template <class Body>
+  void enter(int, Body&& body) { body(); }
+  void pre_smooth(int l) { levels.attr("pre_smooth")(l); }
+  void post_smooth(int l) { levels.attr("post_smooth")(l); }
+  void restrict_down(int l) { levels.attr("restrict_down")(l); }
+  void prolong_up(int l) { levels.attr("prolong_up")(l); }
+  void solve_coarsest() { levels.attr("solve_coarsest")(); }
+};
+
 }  // namespace
 
 void bind_loop(py::module_& m) {
+  m.def("multigrid_cycle", [](py::object levels, int nu1, int nu2, int top, const std::string& cycle) {
+           if (nu1 < 0 || nu2 < 0 || nu1 + nu2 < 1) throw InputError("nu1, nu2 must be >= 0 with nu1 + nu2 >= 1");
+           if (top < 0) throw InputError("top must be a level (>= 0)");
+           PythonLevels L{std::move(levels)};
+           top_level_cycles(L, nu1, nu2, top, parse_cycle(cycle));
+         }, py::arg("levels"), py::arg("nu1"), py::arg("nu2"), py::arg("top"), py::arg("cycle"),
+         "The coarse correction's multigrid recursion from level `top` (mg/cycle_recursion.hpp: the serial "
+         "cycle's), over `levels`: an object with pre_smooth(l), post_smooth(l), restrict_down(l), prolong_up(l) "
+         "and solve_coarsest()");
   m.def("run_loop", [](py::function iterate, py::function record, py::function sweep_change, py::object options,
                        py::object progress) {
            if (!progress.is_none() && !PyCallable_Check(progress.ptr())) throw InputError("progress must be callable or None");

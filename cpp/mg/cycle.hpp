@@ -7,6 +7,7 @@
 #include <algorithm>
 #include "mg/bound_restriction.hpp"
 #include "mg/bounded_coarsest.hpp"
+#include "mg/cycle_recursion.hpp"
 #include "mg/hierarchy.hpp"
 #include "mg/line_smoother.hpp"
 #include "base/solver_options.hpp"
@@ -98,15 +99,8 @@ class CoarseCycle {
     lines_ = lines;
     omega_ = opt.omega;
     omega_post_ = opt.post_omega();
-    cycle(opt, top, opt.cycle);
-    // A W- or F-cycle visits the coarse level twice from the fine level too, as from every other
-    // level (the fine level has no smoothing between the visits, so the second visit is one more
-    // cycle on level `top` from the correction already made: its residual b - A c is the
-    // restricted fine residual after w = P~ c, Galerkin). One visit left the error of a single
-    // coarse cycle in every fine correction: on Kuhn tetrahedra the linear rate then saturates
-    // at 0.52 (V) or 0.40 (W below the fine level only) instead of the two-grid 0.31
-    // (the exact two-grid rate: tests/core/test_tet_two_grid.py).
-    if (opt.cycle != CycleType::V) cycle(opt, top, opt.cycle == CycleType::F ? CycleType::V : CycleType::W);
+    Ops ops{*this, opt};
+    top_level_cycles(ops, opt.nu1, opt.nu2, top, opt.cycle);
     if (add) prolongate_add<d>(P, mask, C.x.data(), w);
     else prolongate<d>(P, mask, C.x.data(), w);
   }
@@ -149,38 +143,41 @@ class CoarseCycle {
       block_gs_sweep<d>(M.A, M.Dinv, L.b.data(), L.x.data(), forward, order, omega);
   }
 
-  void cycle(const SolverOptions& opt, int l, CycleType type) {
+  // The level operations of the cycle's recursion (mg/cycle_recursion.hpp) on the Galerkin levels.
+  struct Ops {
+    CoarseCycle& c;
+    const SolverOptions& opt;
+
     // A level below kSerialLevelRows rows, and every coarser one, runs on the calling thread: its
     // loops are too short to pay for waking the second thread (a W/F-cycle visits the small
     // levels most often). Every loop gives the same bits on any thread count, so this is a
     // matter of time only.
-    if (!serial_ && H_.matrix(l).rows < serial_rows_ && team_size() > 1) {
-      const ThreadScope one(1);
-      serial_ = true;
-      cycle(opt, l, type);
-      serial_ = false;
-      return;
+    template <class Body>
+    void enter(int l, Body&& body) {
+      if (!c.serial_ && c.H_.matrix(l).rows < c.serial_rows_ && team_size() > 1) {
+        const ThreadScope one(1);
+        c.serial_ = true;
+        body();
+        c.serial_ = false;
+        return;
+      }
+      body();
     }
-    Vectors& L = lv_[l];
-    if (l == 0) { solve_coarsest(opt); return; }
-    const BlockMatrix<d>& A = H_.matrix(l);
-    const SweepOrder& order = (*cur_)[l];
-    for (int s = 0; s < opt.nu1; ++s) sweep(l, true, order);
-    const int visits = type == CycleType::V ? 1 : 2;
-    Vectors& C = lv_[l - 1];
-    const Prolongation<d>& P = H_.prolongation(l - 1);
-    for (int v = 0; v < visits; ++v) {
+    void pre_smooth(int l) { c.sweep(l, true, (*c.cur_)[l]); }
+    void post_smooth(int l) { c.sweep(l, false, (*c.cur_)[l], c.omega_post_); }
+    void restrict_down(int l) {
+      Vectors &L = c.lv_[l], &C = c.lv_[l - 1];
+      const Prolongation<d>& P = c.H_.prolongation(l - 1);
       // b - A x restricted as it is formed (one pass over A; was a residual pass, then the restriction)
-      restrict_level_residual<d>(A, P, L.x.data(), L.b.data(), C.b.data(), C.r.data());
+      restrict_level_residual<d>(c.H_.matrix(l), P, L.x.data(), L.b.data(), C.b.data(), C.r.data());
       // the coarser level gets the slack that remains on this one
       if (L.any_bounds) restrict_slack<d>(P, L.lo.data(), L.hi.data(), L.x.data(), C.lo.data(), C.hi.data(), L.bounded.data());
       set_bounded(C, L.any_bounds);
       zero(C.x);
-      cycle(opt, l - 1, (type == CycleType::F && v == 1) ? CycleType::V : type);
-      prolongate_add<d>(P, nullptr, C.x.data(), L.x.data());
     }
-    for (int s = 0; s < opt.nu2; ++s) sweep(l, false, order, omega_post_);
-  }
+    void prolong_up(int l) { prolongate_add<d>(c.H_.prolongation(l - 1), nullptr, c.lv_[l - 1].x.data(), c.lv_[l].x.data()); }
+    void solve_coarsest() { c.solve_coarsest(opt); }
+  };
 
   void solve_coarsest(const SolverOptions& opt) {
     Vectors& L = lv_[0];
@@ -193,7 +190,7 @@ class CoarseCycle {
                                H_.coarsest_shifted(), [&](bool forward) { sweep(0, forward, all); });
   }
 
-  Index serial_rows_ = 0;  // kSerialLevelRows in a correction (see cycle())
+  Index serial_rows_ = 0;  // kSerialLevelRows in a correction (see Ops::enter)
   bool serial_ = false;
   const GalerkinHierarchy<d>& H_;
   std::vector<SweepOrder> order_, coloured_, hashed_;

@@ -218,23 +218,15 @@ class MonotoneMultigridStep {
   double mix(bool state_changed) {
     if constexpr (L::coarse_freezes_bound) {
       std::vector<double>& u = it_.u;
-      if (!any_sliding()) {
-        anderson_.reset();
-        return -1;
-      }
       // The restart test's A (G(x) - x) goes into r_ (free after the coarse correction): where the
       // mixed iterate is refused, u is G(x) bit for bit, and the update of A u adds r_ and takes the
       // test's |u - u_old|_A^2 (the same sums over the same chunks) instead of a second pass over
       // the matrix.
-      double e_change = 0;
-      if (state_changed) e_change = change_norm_squared(old_, u, r_.data());
-      const bool restart = state_changed && std::sqrt(std::max(e_change, 0.0)) < best_step_;
-      const bool mixed = anderson_.step(old_.data(), u.data(), (Index)u.size(),
-                                        [&](double* y, const double* plain) { return admit_mixed(y, plain); }, restart);
-      if (state_changed && !mixed) {
-        parallel_for((Index)u.size(), [&](Index k) { it_.Au[k] += r_[k]; });
-        return std::sqrt(std::max(e_change, 0.0));
-      }
+      return anderson_.settle(
+          old_.data(), u.data(), (Index)u.size(), any_sliding(), state_changed, best_step_,
+          [&] { return std::sqrt(std::max(change_norm_squared(old_, u, r_.data()), 0.0)); },
+          [&](double* y, const double* plain) { return admit_mixed(y, plain); },
+          [&] { parallel_for((Index)u.size(), [&](Index k) { it_.Au[k] += r_[k]; }); });
     }
     return -1;
   }

@@ -67,6 +67,30 @@ class SettledAnderson {
     for (Slot& q : slot_) { q.x.resize(n); q.g.resize(n); }
   }
 
+  // The rule around step() for Algorithm 2's settled cycles, the serial step's and the ranks' alike
+  // (steps/monotone_mg_step.hpp says why): without a sliding node nothing is mixed and the history
+  // goes; a new truncation (state_changed) restarts the history unless the plain cycle's step
+  // change_norm() = |G(x) - x|_A is no smaller than best_step, the smallest step of the solve so
+  // far. Where the state changed and the mixed iterate was refused, gx is G(x) bit for bit, and
+  // keep_change() may take what change_norm() computed (A (G(x) - x)) into A u. Returns that step
+  // there, else -1 (the caller measures it).
+  template <class ChangeNorm, class Admit, class KeepChange>
+  double settle(const double* x, double* gx, Index n, bool any_sliding, bool state_changed, double best_step,
+                ChangeNorm&& change_norm, Admit&& admit, KeepChange&& keep_change) {
+    if (!any_sliding) {
+      reset();
+      return -1;
+    }
+    const double change = state_changed ? change_norm() : 0.0;
+    const bool restart = state_changed && change < best_step;
+    const bool mixed = step(x, gx, n, admit, restart);
+    if (state_changed && !mixed) {
+      keep_change();
+      return change;
+    }
+    return -1;
+  }
+
   // x: the iterate before the cycle; gx: the cycle's result G(x), overwritten with the mixed
   // iterate when `admit(candidate, plain)` accepts it (it may adjust the candidate; plain is G(x)).
   // Returns whether it did. restart: forget the history first (the caller's contact state changed).

@@ -10,8 +10,13 @@ where a row reads a neighbour's new value.
 - Galerkin rows by their owners (operators.py), rebuilt when the truncation or a Hessian changes,
   only the rows whose inputs changed.
 - The kernels of a coarse level (Galerkin rows, residual, restriction, prolongation, bounds) are the
-  core's (cpp/mg/distributed_galerkin.hpp); this module orders them and the exchanges.
-- The coarsest level gathered and solved on every rank.
+  core's (cpp/mg/distributed_galerkin.hpp); the recursion that orders them is the serial cycle's
+  (cpp/mg/cycle_recursion.hpp, through _core.multigrid_cycle), and this module gives it the level
+  operations with their exchanges.
+- The coarsest level gathered and solved on every rank; its bounded correction is the serial one
+  (cpp/mg/bounded_coarsest.hpp).
+- The loop, its stop and the Anderson rule of the settled cycles are the core's too
+  (_core.run_loop; SettledAnderson settle).
 - Norms and energies by exact sums: each owned node's value (its products summed in a fixed order)
   summed exactly over the ranks (exchange.node_dots). A u is kept and updated in the pass that
   measures the step, as the serial step does.
@@ -176,8 +181,9 @@ class CoarseLevel:
 
 class CoarseCorrection:
     """The coarse levels of one rank and the multilevel correction of the serial CoarseCycle: the
-    core's kernels on each level, the cycle and the exchanges here. The smallest coarse levels are
-    held whole by every rank (replicated.py): levels[:k] are whole, levels[k:] distributed."""
+    core's kernels on each level and the core's recursion over them, the exchanges here. The
+    smallest coarse levels are held whole by every rank (replicated.py): levels[:k] are whole,
+    levels[k:] distributed."""
 
     def __init__(self, comm, hierarchy, d: int, fine_transfer: sp.csr_matrix, threads: int = 1,
                  whole_below: Optional[int] = None):
@@ -199,6 +205,7 @@ class CoarseCorrection:
         # onto the fine level from the top coarse level (rotated rows)
         self.fine_transfer = transfer_kernel(fine_transfer, levels[-1], levels[-2], d)
         self.coarsest: Optional[GatheredCoarsest] = None
+        self.opt = None  # the options of the correction under way (the level operations read them)
 
     def _to_whole(self, l: int) -> None:
         """Whole level l's rows from the boundary rows every rank formed for its owned nodes."""
@@ -272,34 +279,45 @@ class CoarseCorrection:
             C.clear_bounds()
         C.set_bounded(bounded)
         C.x[:] = 0.0
-        self._cycle(opt, top, opt.cycle)
-        if opt.cycle != "V":
-            self._cycle(opt, top, "V" if opt.cycle == "F" else "W")
+        self.opt = opt
+        _core.multigrid_cycle(self, opt.nu1, opt.nu2, top, opt.cycle)
         return T.prolong(self._up(top, C.x), m).ravel()
 
-    def _cycle(self, opt, l: int, kind: str) -> None:
-        if l == 0:
-            self._solve_coarsest(opt)
-            return
+    # The level operations of the core's multigrid recursion (mg/cycle_recursion.hpp, the serial
+    # cycle's): level l's sweeps, the restriction to level l - 1 and the prolongation back. From a
+    # distributed level onto a whole one (the boundary) the owned rows are gathered, and the
+    # correction is read whole.
+    def pre_smooth(self, l: int) -> None:
+        """One forward sweep of level l."""
+        self.levels[l].sweep(True, self.opt.omega)
+
+    def post_smooth(self, l: int) -> None:
+        """One backward sweep of level l."""
+        self.levels[l].sweep(False, self.opt.omega_post)
+
+    def restrict_down(self, l: int) -> None:
+        """Level l - 1's right-hand side, bounds (the slack left on level l) and x = 0."""
         L, C = self.levels[l], self.levels[l - 1]
-        # from a distributed level onto a whole one: the owned rows gathered, the correction read whole
         boundary = l >= self.k > l - 1
-        for _ in range(opt.nu1):
-            L.sweep(True, opt.omega)
-        for v in range(1 if kind == "V" else 2):
-            b = L.transfer.restrict_residual(L.residual())
-            C.set_b(self.whole[l - 1].gather(b) if boundary else b)
-            if L.any_bounds:
-                bounds = L.transfer.restrict_bounds(L.lo, L.hi, x=L.x, rows=L.bounded)
-                C.set_bounds(*((self.whole[l - 1].gather(v) for v in bounds) if boundary else bounds))
-            else:
-                C.clear_bounds()
-            C.set_bounded(L.any_bounds)
-            C.x[:] = 0.0
-            self._cycle(opt, l - 1, "V" if (kind == "F" and v == 1) else kind)
-            L.transfer.prolong_add(self._up(l - 1, C.x) if boundary else C.x, L.x)
-        for _ in range(opt.nu2):
-            L.sweep(False, opt.omega_post)
+        b = L.transfer.restrict_residual(L.residual())
+        C.set_b(self.whole[l - 1].gather(b) if boundary else b)
+        if L.any_bounds:
+            bounds = L.transfer.restrict_bounds(L.lo, L.hi, x=L.x, rows=L.bounded)
+            C.set_bounds(*((self.whole[l - 1].gather(v) for v in bounds) if boundary else bounds))
+        else:
+            C.clear_bounds()
+        C.set_bounded(L.any_bounds)
+        C.x[:] = 0.0
+
+    def prolong_up(self, l: int) -> None:
+        """x_l += P x_{l-1}."""
+        L, C = self.levels[l], self.levels[l - 1]
+        boundary = l >= self.k > l - 1
+        L.transfer.prolong_add(self._up(l - 1, C.x) if boundary else C.x, L.x)
+
+    def solve_coarsest(self) -> None:
+        """The coarsest level's correction."""
+        self._solve_coarsest(self.opt)
 
     def _solve_coarsest(self, opt) -> None:
         """The serial solve_coarsest on the gathered level: the exact solve, then the core's bounded
@@ -450,23 +468,17 @@ class DistributedMonotoneStep:
         return not _any(self.comm, not bool(np.all(ok[fine.owned_contacts])))
 
     def mix(self, old: np.ndarray, u: np.ndarray, state_changed: bool) -> float:
-        """The Anderson step of a Coulomb cycle x = old -> G(x) = u (in place), as in the serial
-        step: no mixing without a sliding node; the history restarts when the truncation changed,
-        unless the plain step is no smaller than every step before (then the state changes because
-        the cycle does not converge yet). Returns the step when it was measured here, else -1."""
-        if not self.any_sliding(u):
-            self.anderson.reset()
-            return -1.0
-        # the restart test's step, A (u - old) kept: where the mixed iterate is refused, u is G(x) bit
-        # for bit and A u takes it instead of a second pass over the matrix
-        change = self.difference_norm(u, old) if state_changed else 0.0
-        restart = state_changed and change < self.best_step
-        mixed = self.anderson.step(old, u, self.admit_mixed, restart)
-        z, self._z = self._z, None
-        if state_changed and not mixed:
-            self.Au += z
-            return change
-        return -1.0
+        """The Anderson step of a Coulomb cycle x = old -> G(x) = u (in place) by the serial step's
+        rule (the core's SettledAnderson settle). Where the restart test's step A (u - old) was
+        measured and the mixed iterate refused, A u takes it instead of a second pass over the
+        matrix. Returns the step when it was measured here, else -1."""
+        def keep_change():
+            self.Au += self._z
+
+        measured = self.anderson.settle(old, u, self.any_sliding(u), bool(state_changed), self.best_step,
+                                        lambda: self.difference_norm(u, old), self.admit_mixed, keep_change)
+        self._z = None
+        return measured
 
     def iterate(self, u: np.ndarray) -> float:
         """One cycle on u (n, d, in place); returns ||u_new - u_old||_A."""
