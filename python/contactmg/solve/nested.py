@@ -68,13 +68,13 @@ def _below_lowest(problem, nodes: np.ndarray) -> list:
     if not (h.from_fine_mesh or problem.coarse_levels_from_mesh()):
         mesh = h.meshes[0]
     else:
-        from scipy.spatial import Delaunay
+        from scipy.spatial import Delaunay, QhullError
 
         points = problem.mesh.points[nodes]
         d = points.shape[1]
         try:
             cells = Delaunay(points).simplices.astype(np.int64)
-        except Exception:  # (qhull: fewer nodes than a simplex, or all in a plane)
+        except QhullError:  # fewer nodes than a simplex, or all in a plane
             return []
         cell_type = "triangle" if d == 2 else "tetra"
         facets = boundary_facets(cells, cell_type)
